@@ -1,0 +1,1 @@
+//! Bounding volume hierarchy queries on a triangle mesh.

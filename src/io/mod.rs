@@ -1,0 +1,1 @@
+//! Reading and writing STL, OBJ and PLY meshes.

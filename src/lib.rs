@@ -1,0 +1,16 @@
+//! vesselmsr: repair of triangulated blood-vessel surfaces by the level-set multiscale
+//! representation (MSR) and surface inpainting of Dong, Chien, Shen and Osher.
+//!
+//! Data types live apart from the operations on them: `mesh` (the triangle mesh, its topology and
+//! measures, capping of open ends), `io` (STL, OBJ and PLY), `bvh` (closest point, ray casts and
+//! the fast generalized winding number on a bounding volume hierarchy), and `cli` (the
+//! command-line tool; `main.rs` only calls it).
+
+pub mod bvh;
+pub mod cli;
+pub mod error;
+pub mod io;
+pub mod mesh;
+
+pub use error::{Error, Result};
+pub use mesh::TriMesh;

@@ -1,0 +1,1 @@
+//! Capping of boundary loops (open vessel ends and holes) with constrained Delaunay triangulations.

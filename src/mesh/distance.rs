@@ -1,0 +1,1 @@
+//! Surface-to-surface distances for `compare`.

@@ -1,0 +1,1 @@
+//! The `info` summary of a mesh (validation and measures), serialisable to JSON.

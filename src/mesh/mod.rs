@@ -1,0 +1,14 @@
+//! The triangle mesh and what is measured or repaired on it without a level set: topology
+//! (components, boundary loops, manifoldness, orientation), measures (area, enclosed volume by the
+//! divergence theorem, bounding box, edge length, genus), the `info` summary, capping of open
+//! vessel ends, and surface-to-surface distances for `compare`.
+
+pub mod cap;
+pub mod distance;
+pub mod info;
+pub mod measures;
+pub mod orient;
+pub mod topology;
+mod trimesh;
+
+pub use trimesh::TriMesh;

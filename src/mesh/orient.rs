@@ -1,0 +1,1 @@
+//! Orientation repair: make the triangles of each component consistently wound, and outward.
