@@ -15,3 +15,22 @@ pub fn signed_volume(mesh: &TriMesh) -> f64 {
     }
     sum / 6.0
 }
+
+/// Aspect ratio of the triangle (a, b, c), normalised so an equilateral triangle gives 1:
+/// L_max² · √3 / (4 · area), i.e. the longest edge over the shortest altitude times √3/2.
+/// Degenerate triangles give `f64::INFINITY`.
+pub fn triangle_aspect_ratio(
+    a: &nalgebra::Point3<f64>,
+    b: &nalgebra::Point3<f64>,
+    c: &nalgebra::Point3<f64>,
+) -> f64 {
+    let l2 = (b - a)
+        .norm_squared()
+        .max((c - b).norm_squared())
+        .max((a - c).norm_squared());
+    let area = 0.5 * (b - a).cross(&(c - a)).norm();
+    if area <= 0.0 {
+        return f64::INFINITY;
+    }
+    l2 * 3f64.sqrt() / (4.0 * area)
+}
