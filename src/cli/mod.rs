@@ -1,6 +1,86 @@
-//! The command-line interface.
+//! The `vesselmsr` command-line interface: argument parsing (clap), the global flags (`--quiet`,
+//! `--threads`, `--json`), and one file per command. Errors are printed as one line on stderr with
+//! exit status 2; outputs are only written when the whole command succeeded.
 
-/// Runs the CLI and returns the process exit status.
+mod cap;
+mod compare;
+mod info;
+mod progress;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+/// Repairs triangulated blood-vessel surfaces (level-set multiscale representation).
+#[derive(Debug, Parser)]
+#[command(name = "vesselmsr", version, about, long_about = None)]
+pub struct Cli {
+    /// No progress bars and no notices on stderr (errors are still printed).
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    /// Worker threads for parallel work (default: one per core).
+    #[arg(long, global = true, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Print results as JSON on stdout instead of text.
+    #[arg(long, global = true)]
+    pub json: bool,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Validate a mesh and print its measures (counts, boundary loops, watertightness, orientation,
+    /// volume, area, bounding box, mean edge length, genus).
+    Info {
+        /// Input mesh (.stl, .obj or .ply).
+        mesh: PathBuf,
+    },
+    /// Close every boundary loop (open vessel ends, holes) with refined planar caps and write a
+    /// watertight, outward-oriented mesh.
+    Cap(cap::CapArgs),
+    /// Distances between two surfaces (Hausdorff, mean, RMS) and their volumes.
+    Compare(compare::CompareArgs),
+}
+
+/// Global settings every command sees.
+pub struct Context {
+    pub quiet: bool,
+    pub json: bool,
+}
+
+/// Parses the command line, runs the command and returns the process exit status.
 pub fn run() -> i32 {
-    0
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { 2 } else { 0 };
+        }
+    };
+    match execute(cli) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("vesselmsr: error: {e:#}");
+            2
+        }
+    }
+}
+
+fn execute(cli: Cli) -> anyhow::Result<()> {
+    if let Some(n) = cli.threads {
+        anyhow::ensure!(n >= 1, "--threads must be at least 1");
+        rayon::ThreadPoolBuilder::new().num_threads(n).build_global()?;
+    }
+    let ctx = Context { quiet: cli.quiet, json: cli.json };
+    match cli.command {
+        Command::Info { mesh } => info::run(&ctx, &mesh),
+        Command::Cap(args) => cap::run(&ctx, &args),
+        Command::Compare(args) => compare::run(&ctx, &args),
+    }
+}
+
+/// Prints a value as pretty JSON on stdout.
+fn print_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {
+    println!("{}", serde_json::to_string_pretty(value)?);
+    Ok(())
 }

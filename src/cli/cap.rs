@@ -1,0 +1,91 @@
+//! `vesselmsr cap MESH -o OUT`: close every boundary loop and write a watertight, outward mesh.
+
+use super::{print_json, progress, Context};
+use crate::io::{read_mesh, write_mesh, MeshFormat};
+use crate::mesh::cap::{cap_holes, CapOptions, CapReport};
+use crate::mesh::info::{mesh_info, MeshInfo};
+use crate::mesh::orient::orient_consistently;
+use anyhow::Context as _;
+use std::path::PathBuf;
+
+#[derive(Debug, clap::Args)]
+pub struct CapArgs {
+    /// Input mesh (.stl, .obj or .ply).
+    pub mesh: PathBuf,
+    /// Output mesh (.stl, .obj or .ply); written only if capping succeeds.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Target edge length of cap triangles, in the mesh's own units (default: the mean length
+    /// of each loop's own edges).
+    #[arg(long, value_name = "LENGTH")]
+    pub target_edge: Option<f64>,
+    /// Orient the result outward: fix inconsistent triangles and flip inward-facing input
+    /// (the default).
+    #[arg(long, overrides_with = "no_orient")]
+    pub orient: bool,
+    /// Keep the input's triangle orientation as it is.
+    #[arg(long)]
+    pub no_orient: bool,
+}
+
+#[derive(serde::Serialize)]
+struct CapOutput<'a> {
+    input: &'a MeshInfo,
+    cap: &'a CapReport,
+    output: &'a MeshInfo,
+    inconsistent_faces_flipped: usize,
+}
+
+pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
+    if let Some(l) = args.target_edge {
+        anyhow::ensure!(l.is_finite() && l > 0.0, "--target-edge must be a positive length, got {l}");
+    }
+    // Refuse an unwritable output format before any work is done.
+    MeshFormat::from_path(&args.output)?;
+    let orient = !args.no_orient;
+    let bar = progress::spinner(ctx.quiet, "capping boundary loops");
+    let mut mesh = read_mesh(&args.mesh)?;
+    let input = mesh_info(&mesh);
+    let inconsistent_faces_flipped = if orient { orient_consistently(&mut mesh) } else { 0 };
+    let opts = CapOptions { target_edge: args.target_edge, orient_outward: orient, ..Default::default() };
+    let (capped, report) =
+        cap_holes(&mesh, &opts).with_context(|| format!("{}: capping failed", args.mesh.display()))?;
+    let output = mesh_info(&capped);
+    write_mesh(&args.output, &capped)?;
+    bar.finish_and_clear();
+    if !ctx.quiet {
+        for m in &report.messages {
+            eprintln!("vesselmsr: notice: {m}");
+        }
+        if inconsistent_faces_flipped > 0 {
+            eprintln!(
+                "vesselmsr: notice: {inconsistent_faces_flipped} triangles were wound against their neighbours and were flipped"
+            );
+        }
+    }
+    if ctx.json {
+        return print_json(&CapOutput {
+            input: &input,
+            cap: &report,
+            output: &output,
+            inconsistent_faces_flipped,
+        });
+    }
+    println!(
+        "{}: {} boundary loop(s), orientation {}",
+        args.mesh.display(),
+        input.boundary_loops,
+        input.orientation
+    );
+    println!(
+        "capped {} loop(s): +{} vertices, +{} triangles (largest cap aspect ratio {:.2}){}",
+        report.loops_capped,
+        report.vertices_added,
+        report.faces_added,
+        report.max_cap_aspect_ratio,
+        if report.flipped { "; flipped to face outward" } else { "" }
+    );
+    println!("{}", args.output.display());
+    println!("{output}");
+    Ok(())
+}

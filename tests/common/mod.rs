@@ -1,0 +1,118 @@
+//! Shared helpers of the integration tests: where the real meshes are, the CLI binary, and the
+//! Python reference oracle (reference/oracle.py) run in the project's virtual environment.
+#![allow(dead_code)]
+
+use nalgebra::Point3;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The six real meshes of ../shared/data/real with the counts its SOURCES.md gives:
+/// (file, vertices, faces, boundary loops, closed).
+pub const REAL_MESHES: [(&str, usize, usize, usize, bool); 6] = [
+    ("aorta_abdominal_open_ends.stl", 6068, 11887, 3, false),
+    ("aorta_abdominal_capped.stl", 6468, 12932, 0, true),
+    ("carotid_bifurcation.stl", 5829, 11594, 3, false),
+    ("ica_aneurysm_c0015.stl", 3862, 7485, 3, false),
+    ("coronary_stenosis_xray.stl", 3232, 6400, 2, false),
+    ("cortex_rh_pial_fsaverage5.stl", 10242, 20480, 0, true),
+];
+
+/// The folder of real meshes, or None (with a printed notice) when ../shared is absent.
+pub fn real_dir() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real");
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        println!("skipping: ../shared/data/real not found");
+        None
+    }
+}
+
+/// The project's shipped sample folder.
+pub fn data_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data")
+}
+
+/// Runs the vesselmsr binary with `args`.
+pub fn vesselmsr(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vesselmsr"))
+        .args(args)
+        .output()
+        .expect("the vesselmsr binary runs")
+}
+
+/// Runs the binary, asserts success and parses its stdout as JSON.
+pub fn vesselmsr_json(args: &[&str]) -> Value {
+    let out = vesselmsr(args);
+    assert!(
+        out.status.success(),
+        "vesselmsr {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("stdout is JSON")
+}
+
+/// The Python reference oracle.
+pub struct Oracle {
+    python: PathBuf,
+    script: PathBuf,
+}
+
+/// The oracle, from $VESSELMSR_PYTHON or reference/.venv. Panics with instructions when neither
+/// exists: the oracle tests are part of the suite, `bash tests/run_all.sh` creates the venv.
+pub fn oracle() -> Oracle {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let python = std::env::var_os("VESSELMSR_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("reference/.venv/bin/python"));
+    assert!(
+        python.exists(),
+        "the Python reference oracle is not installed ({}): run `bash tests/run_all.sh`, which creates it",
+        python.display()
+    );
+    Oracle { python, script: root.join("reference/oracle.py") }
+}
+
+impl Oracle {
+    /// Runs an oracle command and returns its JSON answer.
+    pub fn run(&self, args: &[&dyn AsRef<std::ffi::OsStr>]) -> Value {
+        let out = Command::new(&self.python)
+            .arg(&self.script)
+            .args(args.iter().map(|a| a.as_ref()))
+            .output()
+            .expect("python runs");
+        assert!(
+            out.status.success(),
+            "oracle {:?} failed: {}",
+            args.iter().map(|a| a.as_ref().to_string_lossy().into_owned()).collect::<Vec<_>>(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).expect("oracle prints JSON")
+    }
+
+    /// manifold3d / pymeshlab verdict and measures of a mesh file.
+    pub fn check(&self, mesh: &Path) -> Value {
+        self.run(&[&"check", &mesh])
+    }
+
+    /// A per-point query (`closest`, `signed_distance`, `winding`) with `width` values per point.
+    pub fn query(&self, command: &str, mesh: &Path, points: &[Point3<f64>], width: usize) -> (Vec<f64>, Value) {
+        let dir = tempfile::tempdir().unwrap();
+        let (input, output) = (dir.path().join("points.f64"), dir.path().join("out.f64"));
+        let bytes: Vec<u8> =
+            points.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(f64::to_le_bytes).collect();
+        std::fs::write(&input, bytes).unwrap();
+        let answer = self.run(&[&command, &mesh, &input, &output]);
+        let raw = std::fs::read(&output).unwrap();
+        let values: Vec<f64> =
+            raw.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap())).collect();
+        assert_eq!(values.len(), points.len() * width, "oracle {command} output length");
+        (values, answer)
+    }
+}
+
+/// A seeded generator for reproducible test points.
+pub fn rng(seed: u64) -> rand::rngs::StdRng {
+    rand::SeedableRng::seed_from_u64(seed)
+}
