@@ -210,10 +210,7 @@ impl fmt::Display for MeshInfo {
         row(f, "orientation", orient.to_string())?;
         let vol = match self.volume {
             Some(v) => format!("{} (file units³)", num(v)),
-            None => format!(
-                "n/a, not watertight (signed volume {} file units³)",
-                num(self.signed_volume)
-            ),
+            None => "n/a (not watertight)".to_string(),
         };
         row(f, "volume", vol)?;
         row(f, "area", format!("{} (file units²)", num(self.area)))?;
