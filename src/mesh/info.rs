@@ -60,20 +60,15 @@ pub struct MeshInfo {
 pub fn mesh_info(mesh: &TriMesh) -> MeshInfo {
     let map = EdgeMap::new(mesh);
     let (components, labels) = connected_components(mesh);
-    let boundary_edges = map.boundary_edges();
-    let non_manifold_edges = map.non_manifold_edges();
+    let edges = map.summary();
+    let (boundary_edges, non_manifold_edges) = (edges.boundary_edges, edges.non_manifold_edges);
     let non_manifold_vertices = map.non_manifold_vertices();
-    let consistent = map.is_consistently_oriented();
     let watertight = mesh.num_faces() > 0
         && boundary_edges == 0
         && non_manifold_edges == 0
         && non_manifold_vertices == 0
-        && consistent;
-    let boundary_loops = if boundary_edges == 0 {
-        0
-    } else {
-        map.boundary_loops().len()
-    };
+        && edges.consistent;
+    let boundary_loops = map.boundary_loops().len();
     let mean_edge = mean_edge_length_of(&map);
     let signed_volume = signed_volume(mesh);
     let (lo, hi) = bounding_box(mesh);
@@ -87,7 +82,7 @@ pub fn mesh_info(mesh: &TriMesh) -> MeshInfo {
         non_manifold_vertices,
         degenerate_faces: degenerate_faces_with(mesh, mean_edge),
         watertight,
-        orientation: orientation_of(&map, components, &labels),
+        orientation: orientation_of(&map, &edges, components, &labels),
         volume: watertight.then_some(signed_volume.abs()),
         signed_volume,
         area: area(mesh),
@@ -95,7 +90,7 @@ pub fn mesh_info(mesh: &TriMesh) -> MeshInfo {
         bbox_max: hi.coords.into(),
         mean_edge,
         euler_characteristic: euler_characteristic_of(&map),
-        genus: genus_of(&map, components, non_manifold_vertices),
+        genus: genus_of(&map, &edges, components, non_manifold_vertices),
     }
 }
 

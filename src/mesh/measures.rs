@@ -7,7 +7,7 @@
 //! is Σ (a−p)·((b−p)×(c−p))/6 over its triangles (Gauss divergence theorem), independent of p.
 //! Genus follows from Euler–Poincaré: χ = V − E + F = Σ over components (2 − 2gᵢ).
 
-use super::topology::{connected_components, EdgeMap};
+use super::topology::{connected_components, EdgeMap, EdgeSummary};
 use super::TriMesh;
 use nalgebra::{Point3, Vector3};
 
@@ -191,22 +191,23 @@ pub(crate) fn euler_characteristic_of(map: &EdgeMap) -> i64 {
 pub fn genus(mesh: &TriMesh) -> Option<i64> {
     let map = EdgeMap::new(mesh);
     let (n, _) = connected_components(mesh);
-    genus_of(&map, n, map.non_manifold_vertices())
+    genus_of(&map, &map.summary(), n, map.non_manifold_vertices())
 }
 
 pub(crate) fn genus_of(
     map: &EdgeMap,
+    edges: &EdgeSummary,
     components: usize,
     non_manifold_vertices: usize,
 ) -> Option<i64> {
     if map.mesh().faces.is_empty()
         || non_manifold_vertices > 0
-        || map.boundary_edges() > 0
-        || map.non_manifold_edges() > 0
+        || edges.boundary_edges > 0
+        || edges.non_manifold_edges > 0
     {
         return None;
     }
-    if !map.is_consistently_oriented() && !super::orient::is_orientable_of(map) {
+    if !edges.consistent && !super::orient::is_orientable_of(map) {
         return None;
     }
     let twice = 2 * components as i64 - euler_characteristic_of(map);

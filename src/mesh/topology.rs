@@ -117,27 +117,38 @@ impl<'m> EdgeMap<'m> {
         (e != u32::MAX).then_some(e as usize)
     }
 
+    /// The edge counts and winding check in one pass.
+    pub(crate) fn summary(&self) -> EdgeSummary {
+        let mut s = EdgeSummary {
+            boundary_edges: 0,
+            non_manifold_edges: 0,
+            consistent: true,
+        };
+        for e in 0..self.num_edges() {
+            let u = self.uses(e);
+            match u.len() {
+                1 => s.boundary_edges += 1,
+                2 => s.consistent &= u[0].forward != u[1].forward,
+                _ => s.non_manifold_edges += 1,
+            }
+        }
+        s
+    }
+
     /// Number of boundary edges (used by exactly one face).
     pub fn boundary_edges(&self) -> usize {
-        (0..self.num_edges())
-            .filter(|&e| self.valence(e) == 1)
-            .count()
+        self.summary().boundary_edges
     }
 
     /// Number of non-manifold edges (used by more than two faces).
     pub fn non_manifold_edges(&self) -> usize {
-        (0..self.num_edges())
-            .filter(|&e| self.valence(e) > 2)
-            .count()
+        self.summary().non_manifold_edges
     }
 
     /// Whether every edge used by exactly two faces is traversed in opposite directions by them.
     /// Boundary and non-manifold edges are not judged.
     pub fn is_consistently_oriented(&self) -> bool {
-        (0..self.num_edges()).all(|e| {
-            let u = self.uses(e);
-            u.len() != 2 || u[0].forward != u[1].forward
-        })
+        self.summary().consistent
     }
 
     /// The non-manifold vertices, sorted: vertices whose incident faces split into two or more fans,
@@ -291,6 +302,15 @@ impl<'m> EdgeMap<'m> {
     }
 }
 
+/// What one pass over the edges tells: see [`EdgeMap::boundary_edges`],
+/// [`EdgeMap::non_manifold_edges`] and [`EdgeMap::is_consistently_oriented`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EdgeSummary {
+    pub boundary_edges: usize,
+    pub non_manifold_edges: usize,
+    pub consistent: bool,
+}
+
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
     while parent[x as usize] != x {
         let g = parent[parent[x as usize] as usize];
@@ -409,15 +429,20 @@ impl fmt::Display for Orientation {
 pub fn orientation(mesh: &TriMesh) -> Orientation {
     let map = EdgeMap::new(mesh);
     let (n, labels) = connected_components(mesh);
-    orientation_of(&map, n, &labels)
+    orientation_of(&map, &map.summary(), n, &labels)
 }
 
 /// [`orientation`] from an already built edge map and component labelling.
-pub(crate) fn orientation_of(map: &EdgeMap, n_components: usize, labels: &[u32]) -> Orientation {
-    if !map.is_consistently_oriented() {
+pub(crate) fn orientation_of(
+    map: &EdgeMap,
+    edges: &EdgeSummary,
+    n_components: usize,
+    labels: &[u32],
+) -> Orientation {
+    if !edges.consistent {
         return Orientation::Inconsistent;
     }
-    if map.mesh().faces.is_empty() || map.boundary_edges() > 0 {
+    if map.mesh().faces.is_empty() || edges.boundary_edges > 0 {
         return Orientation::Open;
     }
     let vols = super::measures::component_signed_volumes(map.mesh(), n_components, labels);
