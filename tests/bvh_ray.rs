@@ -470,3 +470,57 @@ fn unusable_rays_and_empty_meshes_miss() {
     assert!(empty.cast_ray(&o, &z, f64::INFINITY).is_none());
     assert_eq!(empty.count_ray_hits(&o, &z, f64::INFINITY), 0);
 }
+
+#[test]
+fn grazing_ray_is_not_culled_by_f32_boxes() {
+    // A triangle in the plane x = 0 (a flat leaf box) and a ray crossing that plane at a shallow
+    // angle whose x-direction component (4e-8) is below f32 epsilon, which obvhs's slab test
+    // clamps to 1.19e-7: the f32 ray crosses x = 0 at t ≈ 1.7 instead of 5, outside the
+    // triangle's z-range, so without the box padding the leaf would be culled. A ring of small
+    // triangles keeps the ray origin inside the root box and the flat triangle in its own leaf.
+    let mut v = vec![
+        Point3::new(0.0, -1.0, -1.0),
+        Point3::new(0.0, 1.0, -1.0),
+        Point3::new(0.0, 0.0, 2.0),
+    ];
+    let mut f = vec![[0, 1, 2]];
+    for k in 0..64 {
+        let a = k as f64 * std::f64::consts::TAU / 64.0;
+        let c = Point3::new(-3.0 + 6.0 * a.cos(), 8.0 * a.sin(), -8.0 + 0.1 * k as f64);
+        let n = v.len() as u32;
+        v.extend([
+            c,
+            c + Vector3::new(0.1, 0.0, 0.0),
+            c + Vector3::new(0.0, 0.1, 0.0),
+        ]);
+        f.push([n, n + 1, n + 2]);
+    }
+    let mesh = TriMesh::new(v, f);
+    let bvh = MeshBvh::new(&mesh);
+    let o = Point3::new(-2e-7, 0.2, -5.0);
+    let d = Vector3::new(4e-8, 0.0, 1.0);
+    // The set-up is what it claims: the origin inside the root box, face 0 in a leaf whose box
+    // is flat in x up to the padding.
+    let tree = bvh.obvhs_bvh();
+    let root = tree.nodes[0].aabb();
+    let local = o.coords - bvh.local_origin();
+    assert!((0..3).all(|k| (root.min[k] as f64) < local[k] && local[k] < root.max[k] as f64));
+    let leaf = tree
+        .nodes
+        .iter()
+        .find(|n| {
+            n.is_leaf()
+                && (n.first_index..n.first_index + n.prim_count)
+                    .any(|s| bvh.slot_face(s as usize) == 0)
+        })
+        .unwrap();
+    assert!(leaf.aabb().max.x - leaf.aabb().min.x < 1e-3);
+
+    let want = cast_ray_brute(&mesh, &o, &d, f64::INFINITY).expect("brute-force hit");
+    let got = bvh
+        .cast_ray(&o, &d, f64::INFINITY)
+        .expect("grazing hit culled");
+    assert_eq!(got.face, 0);
+    assert!((got.t - want.t).abs() <= 1e-12 * want.t);
+    assert_eq!(bvh.count_ray_hits(&o, &d, f64::INFINITY), 1);
+}
