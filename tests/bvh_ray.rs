@@ -429,7 +429,7 @@ fn real_closed_meshes_hit_parity_matches_winding_number() {
             let n = wn.bvh().count_ray_hits(o, d, f64::INFINITY);
             assert_eq!(n % 2 == 1, inside, "{name}: {n} hits from {o}, w = {w}");
             checked += 1;
-            odd += (n % 2) as usize;
+            odd += n % 2;
         }
         println!("{name}: hit parity matches the winding number on {checked} rays ({odd} odd)");
         assert!(odd > 300 && checked - odd > 300);

@@ -25,7 +25,7 @@ pub struct ClosestPoint {
     pub distance: f64,
     /// Mesh face holding `point`; `u32::MAX` when nothing was found.
     pub face: u32,
-    /// Barycentric coordinates of `point` in that face: point = Σ bary[i] · corner i.
+    /// Barycentric coordinates of `point` in that face: point = Σᵢ `bary[i]` · corner i.
     pub bary: [f64; 3],
 }
 
@@ -102,7 +102,7 @@ pub fn closest_point_on_triangle(
     // the region answer and the nearest edge is then taken.
     let (ab2, ac2, abac) = (ab.norm_squared(), ac.norm_squared(), ab.dot(&ac));
     let gram = ab2 * ac2 - abac * abac;
-    if !(gram > 0.0) {
+    if gram.is_nan() || gram <= 0.0 {
         return closest_on_edges(p, a, b, c);
     }
     let region = closest_by_regions(p, a, b, c, &ab, &ac);
@@ -188,7 +188,7 @@ fn closest_by_regions(
     // in exact arithmetic). Rounding can only push one slightly below 0 near an edge: the
     // nearest edge is then the answer.
     let den = va + vb + vc;
-    if !(den > 0.0) || va < 0.0 || vb < 0.0 || vc < 0.0 {
+    if den.is_nan() || den <= 0.0 || va < 0.0 || vb < 0.0 || vc < 0.0 {
         return closest_on_edges(p, a, b, c);
     }
     let v = vb / den;
@@ -211,7 +211,7 @@ impl MeshBvh {
     /// `None` otherwise. Cheaper than [`MeshBvh::closest_point`] for small `max_dist`, since
     /// nodes farther than `max_dist` are never opened (narrow-band queries).
     pub fn closest_point_within(&self, p: &Point3<f64>, max_dist: f64) -> Option<ClosestPoint> {
-        if self.is_empty() || !(max_dist >= 0.0) {
+        if self.is_empty() || max_dist.is_nan() || max_dist < 0.0 {
             return None;
         }
         let q = [

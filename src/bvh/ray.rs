@@ -29,7 +29,7 @@ pub struct RayHit {
     pub t: f64,
     /// Mesh face hit.
     pub face: u32,
-    /// Barycentric coordinates of the hit in that face: point = Σ bary[i] · corner i.
+    /// Barycentric coordinates of the hit in that face: point = Σᵢ `bary[i]` · corner i.
     pub bary: [f64; 3],
     /// The hit point, `origin + t · dir` (world units).
     pub point: Point3<f64>,
@@ -105,11 +105,14 @@ pub fn intersect_ray_triangle(
     Some((t, [u * inv, v * inv, w * inv]))
 }
 
-/// The ray's segment inside the padded root box, in the local frame, with a unit direction:
-/// `(local origin, unit dir, |dir|, s_start, s_end)`, where s is world distance along the ray.
+/// The part of a ray inside the padded root box. `s` is the distance along the ray from its
+/// origin in world units (s = t·|dir|); the segment is [s_start, s_end].
 struct Clipped {
+    /// The point at s_start, in the local frame of the node boxes.
     start_local: Vector3<f64>,
+    /// dir / |dir|.
     unit: Vector3<f64>,
+    /// |dir|.
     len: f64,
     s_start: f64,
     s_end: f64,
@@ -120,7 +123,7 @@ impl MeshBvh {
     /// box or the input is not a usable ray (non-finite values, zero direction, negative or NaN
     /// `t_max`).
     fn clip_ray(&self, origin: &Point3<f64>, dir: &Vector3<f64>, t_max: f64) -> Option<Clipped> {
-        if self.is_empty() || !(t_max >= 0.0) {
+        if self.is_empty() || t_max.is_nan() || t_max < 0.0 {
             return None;
         }
         if !origin.iter().all(|c| c.is_finite()) || !dir.iter().all(|c| c.is_finite()) {
@@ -147,7 +150,7 @@ impl MeshBvh {
                 s1 = s1.min(ta.max(tb));
             }
         }
-        if !(s0 <= s1) {
+        if s0.is_nan() || s1.is_nan() || s0 > s1 {
             return None;
         }
         // Back off by the padding so rounding in this clip cannot start past a hit.
