@@ -78,3 +78,23 @@ fn open_meshes_have_no_volume() {
     let text = vesselmsr(&["compare", "--samples", "1000", a, a]);
     assert!(String::from_utf8_lossy(&text.stdout).contains("not watertight"));
 }
+
+#[test]
+fn hausdorff_brackets_libigl_on_a_capped_aorta() {
+    // libigl's hausdorff measures vertices against the other mesh's triangles, a lower bound of
+    // the surface Hausdorff distance; ours adds dense samples, so it lies between that bound and
+    // the bound plus one mean edge.
+    let oracle = oracle();
+    let tmp = tempfile::tempdir().unwrap();
+    let open = data_dir().join("aorta_abdominal_open_ends.stl");
+    let capped = tmp.path().join("capped.stl");
+    let (o, c) = (open.to_str().unwrap(), capped.to_str().unwrap());
+    vesselmsr_json(&["cap", "--json", o, "-o", c]);
+    let ours = vesselmsr_json(&["compare", "--json", o, c]);
+    let theirs = oracle.run(&[&"hausdorff", &open, &capped]);
+    let edge = vesselmsr_json(&["info", "--json", o])["mean_edge"].as_f64().unwrap();
+    let (h, h_igl) = (ours["hausdorff"].as_f64().unwrap(), theirs["hausdorff"].as_f64().unwrap());
+    println!("hausdorff open vs capped aorta: ours {h}, libigl (vertex bound) {h_igl}, mean edge {edge}");
+    assert!(h >= h_igl * (1.0 - 1e-9), "ours {h} below libigl's lower bound {h_igl}");
+    assert!(h <= h_igl + edge, "ours {h} exceeds libigl's bound {h_igl} by more than a mean edge");
+}
