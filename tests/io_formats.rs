@@ -188,6 +188,16 @@ fn binary_stl_whose_header_starts_with_solid() {
 }
 
 #[test]
+fn binary_stl_with_padding_after_the_last_triangle() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = binary_stl(b"padded", &cube_triangles());
+    bytes.extend_from_slice(&[0u8; 30]);
+    let path = write(dir.path(), "padded.stl", &bytes);
+    let mesh = read_mesh(&path).unwrap();
+    assert_eq!((mesh.num_vertices(), mesh.num_faces()), (8, 12));
+}
+
+#[test]
 fn stl_cube_welds_to_8_vertices() {
     let dir = tempfile::tempdir().unwrap();
     let path = write(

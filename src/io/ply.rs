@@ -216,7 +216,7 @@ fn read_header(bytes: &[u8]) -> Result<Header, String> {
                 });
             }
             Some("end_header") => break,
-            Some(_) => return Err(bad("unknown header keyword")),
+            Some(_) => return Err(bad("unknown header keyword (is 'end_header' missing?)")),
         }
     }
     let encoding = encoding.ok_or("PLY header has no 'format' line")?;

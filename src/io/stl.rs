@@ -23,14 +23,23 @@ pub(crate) fn read(bytes: &[u8]) -> Result<TriMesh, String> {
     if binary_size == Some(bytes.len() as u64) {
         return read_binary(bytes);
     }
-    if starts_with_solid(bytes) {
-        return read_ascii(bytes);
-    }
-    match (declared, binary_size) {
-        (Some(n), Some(size)) if size > bytes.len() as u64 => Err(format!(
+    let too_short = |n: u64| {
+        format!(
             "binary STL header declares {n} triangles but the file holds only {} (84 + 50·n bytes expected)",
             (bytes.len() - HEADER - 4) / RECORD
-        )),
+        )
+    };
+    if starts_with_solid(bytes) {
+        return read_ascii(bytes).map_err(|message| match (declared, binary_size) {
+            // A NUL byte means binary data whose header happens to begin with "solid".
+            (Some(n), Some(size)) if size > bytes.len() as u64 && bytes.contains(&0) => {
+                too_short(n)
+            }
+            _ => message,
+        });
+    }
+    match (declared, binary_size) {
+        (Some(n), Some(size)) if size > bytes.len() as u64 => Err(too_short(n)),
         // Extra bytes after the last triangle: some writers pad; the declared triangles are read.
         (Some(_), Some(_)) => read_binary(bytes),
         _ => Err(format!(
