@@ -573,11 +573,15 @@ fn bad_scalar_fields_are_refused() {
 /// Reads `bytes` as `name` after every cut and after seeded random byte changes: the reader may
 /// accept or refuse but must not panic.
 fn survives_damage(dir: &Path, name: &str, bytes: &[u8], rng: &mut StdRng) -> (usize, usize) {
-    let path = dir.join(name);
     let mut outcomes = (0, 0);
+    let mut tries = 0;
     let mut try_read = |data: &[u8], what: &str| {
+        // A fresh name each time: rewriting one file makes ext4 flush it on every close.
+        tries += 1;
+        let path = dir.join(format!("{tries}-{name}"));
         std::fs::write(&path, data).unwrap();
         let result = std::panic::catch_unwind(|| read_mesh(&path));
+        std::fs::remove_file(&path).unwrap();
         match result {
             Ok(Ok(_)) => outcomes.0 += 1,
             Ok(Err(e)) => {

@@ -5,7 +5,8 @@
 //! numeric type; the `face` element must have an integer list `vertex_indices` (or `vertex_index`);
 //! polygons are fan-triangulated from their first corner. Every other element and property is
 //! skipped according to its declared type. Other scalar properties of `vertex` are returned as
-//! f32 fields. Before anything is allocated, the element counts of the header are checked against
+//! f32 fields. ASCII values are taken as written (parsed as f64 whatever the declared type); binary
+//! values are read with their declared type. Before anything is allocated, the element counts of the header are checked against
 //! the number of bytes the data section can hold, so a lying header cannot cause a huge allocation.
 
 use super::text::{parse_f64, parse_i64, show, Tokens};
@@ -409,8 +410,11 @@ fn located(e: ValueError, element: &Element, i: u64) -> String {
 
 /// What to do with each property of the vertex element.
 enum VertexSlot {
-    Coord(usize),
-    Field(usize),
+    /// Coordinate 0, 1 or 2, stored with this type.
+    Coord(usize, Scalar),
+    /// Extra scalar field number k, stored with this type.
+    Field(usize, Scalar),
+    /// A list: skipped.
     Skip,
 }
 
@@ -420,17 +424,17 @@ fn read_vertices(body: &mut Body, e: &Element) -> Result<(Vec<Point3<f64>>, Fiel
     let mut slots = Vec::with_capacity(e.properties.len());
     for p in &e.properties {
         let slot = match (&p.kind, p.name.as_str()) {
-            (Kind::Scalar(_), "x") => VertexSlot::Coord(0),
-            (Kind::Scalar(_), "y") => VertexSlot::Coord(1),
-            (Kind::Scalar(_), "z") => VertexSlot::Coord(2),
-            (Kind::Scalar(_), name) => {
+            (&Kind::Scalar(s), "x") => VertexSlot::Coord(0, s),
+            (&Kind::Scalar(s), "y") => VertexSlot::Coord(1, s),
+            (&Kind::Scalar(s), "z") => VertexSlot::Coord(2, s),
+            (&Kind::Scalar(s), name) => {
                 // Bounded: check_counts verified the count against the file size.
                 fields.push((name.to_string(), Vec::with_capacity(e.count as usize)));
-                VertexSlot::Field(fields.len() - 1)
+                VertexSlot::Field(fields.len() - 1, s)
             }
             (Kind::List { .. }, _) => VertexSlot::Skip,
         };
-        if let VertexSlot::Coord(c) = slot {
+        if let VertexSlot::Coord(c, _) = slot {
             if seen[c] {
                 return Err(format!("PLY vertex element declares '{}' twice", p.name));
             }
@@ -448,15 +452,13 @@ fn read_vertices(body: &mut Body, e: &Element) -> Result<(Vec<Point3<f64>>, Fiel
     for i in 0..e.count {
         let mut p = [0.0; 3];
         for (prop, slot) in e.properties.iter().zip(&slots) {
-            let value = |body: &mut Body| match prop.kind {
-                Kind::Scalar(s) => body.float(s),
-                Kind::List { .. } => unreachable!("lists are skipped"),
-            };
             match *slot {
-                VertexSlot::Coord(c) => p[c] = value(body).map_err(|err| located(err, e, i))?,
-                VertexSlot::Field(f) => fields[f]
+                VertexSlot::Coord(c, s) => {
+                    p[c] = body.float(s).map_err(|err| located(err, e, i))?
+                }
+                VertexSlot::Field(f, s) => fields[f]
                     .1
-                    .push(value(body).map_err(|err| located(err, e, i))? as f32),
+                    .push(body.float(s).map_err(|err| located(err, e, i))? as f32),
                 VertexSlot::Skip => body
                     .skip_property(prop, "a vertex")
                     .map_err(|err| located(err, e, i))?,
