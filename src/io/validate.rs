@@ -1,0 +1,39 @@
+//! The checks every mesh passes after reading: indices in range, finite coordinates, at least one
+//! triangle, and not only degenerate triangles. Vertices and triangles are numbered from 0 in the
+//! messages.
+
+use crate::TriMesh;
+
+/// Checks that every face index refers to an existing vertex.
+pub(crate) fn check_indices(mesh: &TriMesh) -> Result<(), String> {
+    let n = mesh.num_vertices();
+    for (f, face) in mesh.faces.iter().enumerate() {
+        if let Some(&v) = face.iter().find(|&&v| v as usize >= n) {
+            return Err(format!(
+                "triangle {f} references vertex {v} but only {n} vertices exist"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The full check of a mesh that was just read.
+pub(crate) fn validate_mesh(mesh: &TriMesh) -> Result<(), String> {
+    for (v, p) in mesh.vertices.iter().enumerate() {
+        if let Some(bad) = p.iter().find(|c| !c.is_finite()) {
+            return Err(format!("vertex {v} has a non-finite coordinate ({bad})"));
+        }
+    }
+    if mesh.faces.is_empty() {
+        return Err("no triangles".to_string());
+    }
+    check_indices(mesh)?;
+    let degenerate = |f: usize| {
+        let [a, b, c] = mesh.faces[f];
+        a == b || b == c || a == c || mesh.face_normal_raw(f) == nalgebra::Vector3::zeros()
+    };
+    if (0..mesh.num_faces()).all(degenerate) {
+        return Err(format!("all {} triangles are degenerate", mesh.num_faces()));
+    }
+    Ok(())
+}
