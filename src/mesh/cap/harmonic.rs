@@ -59,7 +59,7 @@ pub(super) fn harmonic_fill(nbrs: &[Vec<usize>], fixed: &[bool], values: &mut [f
         }
         apply(&p, &mut ap);
         let pap: f64 = p.iter().zip(&ap).map(|(a, b)| a * b).sum();
-        if !(pap > 0.0) {
+        if pap.is_nan() || pap <= 0.0 {
             break; // singular part (a free component without fixed vertices): stop where we are
         }
         let alpha = rr / pap;

@@ -16,7 +16,9 @@
 
 mod fill;
 mod harmonic;
+mod improve;
 mod planar;
+mod weld;
 
 use super::measures::{signed_volume, triangle_aspect_ratio};
 use super::topology::boundary_loops;
@@ -39,6 +41,10 @@ pub struct CapOptions {
     /// Longest loop, in vertices, closed by the O(n³) minimum-area triangulation in the fallback;
     /// longer loops start from a centroid fan instead.
     pub max_dp_loop_vertices: usize,
+    /// Rim edges shorter than this fraction of their loop's target edge length (dimensionless)
+    /// are collapsed before capping, merging two rim vertices that are a rounding error apart
+    /// (no cap triangle on such an edge can have a bounded aspect ratio); 0 disables.
+    pub rim_weld_fraction: f64,
     /// Most vertices a single cap may add (a guard against a tiny target edge length), a count.
     pub max_vertices_per_cap: usize,
 }
@@ -50,6 +56,7 @@ impl Default for CapOptions {
             min_angle_deg: 28.0,
             orient_outward: true,
             max_dp_loop_vertices: 1000,
+            rim_weld_fraction: 1e-3,
             max_vertices_per_cap: 1_000_000,
         }
     }
@@ -106,8 +113,14 @@ pub struct CapReport {
     pub flipped: bool,
     /// Largest aspect ratio (equilateral = 1) over all cap triangles; 0 when nothing was capped.
     pub max_cap_aspect_ratio: f64,
-    /// The cap triangles: they are appended after the input's triangles, in this index range.
+    /// The cap triangles: they come after the input's triangles (less `removed_faces`), in this
+    /// index range.
     pub cap_faces: Range<usize>,
+    /// Rim vertices merged into a neighbour before capping, as [kept, removed] vertex indices
+    /// (see `CapOptions::rim_weld_fraction`); the removed ones stay in the vertex list unused.
+    pub welded_rim_vertices: Vec<[u32; 2]>,
+    /// Indices (in the input) of the sliver triangles dropped by those merges, ascending.
+    pub removed_faces: Vec<usize>,
     /// Per simple loop details.
     pub loops: Vec<LoopCap>,
     /// One-line human notices (fallbacks, split loops, refinement limits), for the CLI's stderr.
@@ -127,8 +140,12 @@ fn ekey(a: u32, b: u32) -> (u32, u32) {
 }
 
 /// Closes every boundary loop of `mesh` (see the module documentation) and returns the closed
-/// mesh, whose first vertices and triangles are the input's, followed by the cap vertices and
-/// triangles (`report.cap_faces`).
+/// mesh: the input's vertices (same indices) followed by the cap vertices, and the input's
+/// triangles followed by the cap triangles (`report.cap_faces`). The only change to the input's
+/// part is the collapse of degenerate rim edges (`CapOptions::rim_weld_fraction`): those
+/// triangles (`report.removed_faces`) are left out, the merged vertices
+/// (`report.welded_rim_vertices`) are renamed in the remaining triangles, and stay in the vertex
+/// list unreferenced.
 ///
 /// Errors with [`Error::InvalidMesh`] for out-of-range vertex indices and with
 /// [`Error::Geometry`] for loops that cannot be capped (non-finite coordinates, a loop part of fewer
@@ -152,17 +169,77 @@ pub fn cap_holes(mesh: &TriMesh, opts: &CapOptions) -> Result<(TriMesh, CapRepor
             )));
         }
     }
-
-    let mut out = mesh.clone();
     let mut report = CapReport::default();
+    let mut loops = boundary_loops(mesh);
+    let loop_target = |lp: &[u32]| {
+        let n = lp.len();
+        let perimeter: f64 = (0..n)
+            .map(|i| {
+                (mesh.vertices[lp[(i + 1) % n] as usize] - mesh.vertices[lp[i] as usize]).norm()
+            })
+            .sum();
+        opts.target_edge_length.unwrap_or(perimeter / n as f64)
+    };
+    for (li, lp) in loops.iter().enumerate() {
+        if lp.iter().any(|&v| {
+            !mesh.vertices[v as usize]
+                .coords
+                .iter()
+                .all(|c| c.is_finite())
+        }) {
+            return Err(Error::Geometry(format!(
+                "boundary loop {li} has a vertex with a non-finite coordinate"
+            )));
+        }
+        let h = loop_target(lp);
+        if !(h.is_finite() && h > 0.0) {
+            return Err(Error::Geometry(format!(
+                "boundary loop {li} ({} vertices) has zero length; cannot cap it",
+                lp.len()
+            )));
+        }
+    }
+
+    // Collapse degenerate rim edges.
+    let mut work = weld::Working::new(nv, &mesh.faces);
+    if opts.rim_weld_fraction > 0.0 {
+        let mut on_loops: HashMap<u32, usize> = HashMap::new();
+        for &v in loops.iter().flatten() {
+            *on_loops.entry(v).or_insert(0) += 1;
+        }
+        for (li, lp) in loops.iter_mut().enumerate() {
+            let min_len = opts.rim_weld_fraction * loop_target(lp);
+            let n0 = lp.len();
+            let (merged, removed) =
+                weld::collapse_short_rim_edges(&mesh.vertices, &mut work, lp, min_len, &on_loops);
+            if !merged.is_empty() {
+                report.messages.push(format!(
+                    "loop {li} ({n0} vertices): merged {} rim vertices into a neighbour closer than {min_len:.3e} \
+                     ({} × the target edge length), removing {} sliver triangles",
+                    merged.len(),
+                    opts.rim_weld_fraction,
+                    removed.len()
+                ));
+            }
+            report.welded_rim_vertices.extend(merged);
+            report.removed_faces.extend(removed);
+        }
+        report.removed_faces.sort_unstable();
+    }
+    let kept_faces: Vec<[u32; 3]> = (0..work.faces.len())
+        .filter(|&f| work.alive[f])
+        .map(|f| work.faces[f])
+        .collect();
+    let base_faces = kept_faces.len();
+    let mut out = TriMesh::new(mesh.vertices.clone(), kept_faces);
     let mut edges: HashSet<(u32, u32)> = HashSet::new();
-    for f in &mesh.faces {
+    for f in &out.faces {
         for k in 0..3 {
             edges.insert(ekey(f[k], f[(k + 1) % 3]));
         }
     }
 
-    for (li, lp) in boundary_loops(mesh).iter().enumerate() {
+    for (li, lp) in loops.iter().enumerate() {
         let cycles = split_at_repeated_vertices(lp);
         if cycles.len() > 1 {
             report.messages.push(format!(
@@ -179,17 +256,7 @@ pub fn cap_holes(mesh: &TriMesh, opts: &CapOptions) -> Result<(TriMesh, CapRepor
                 )));
             }
             let pts: Vec<Point3<f64>> = cyc.iter().map(|&v| out.vertices[v as usize]).collect();
-            if pts.iter().any(|p| !p.coords.iter().all(|c| c.is_finite())) {
-                return Err(Error::Geometry(format!(
-                    "boundary loop {li} has a vertex with a non-finite coordinate"
-                )));
-            }
-            let perimeter: f64 = (0..pts.len())
-                .map(|i| (pts[(i + 1) % pts.len()] - pts[i]).norm())
-                .sum();
-            let h = opts
-                .target_edge_length
-                .unwrap_or(perimeter / pts.len() as f64);
+            let h = loop_target(cyc);
             if !(h.is_finite() && h > 0.0) {
                 return Err(Error::Geometry(format!(
                     "boundary loop {li} ({} vertices) has zero length; cannot cap it",
@@ -207,9 +274,9 @@ pub fn cap_holes(mesh: &TriMesh, opts: &CapOptions) -> Result<(TriMesh, CapRepor
         report.loops_capped += 1;
     }
 
-    report.vertices_added = out.num_vertices() - mesh.num_vertices();
-    report.faces_added = out.num_faces() - mesh.num_faces();
-    report.cap_faces = mesh.num_faces()..out.num_faces();
+    report.vertices_added = out.num_vertices() - nv;
+    report.faces_added = out.num_faces() - base_faces;
+    report.cap_faces = base_faces..out.num_faces();
     report.max_cap_aspect_ratio = report
         .loops
         .iter()

@@ -3,6 +3,7 @@
 //! constraint edges kept whole), and lifting back with a harmonic out-of-plane offset.
 
 use super::harmonic::harmonic_fill;
+use super::improve::Improver;
 use super::Patch;
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use spade::handles::FixedVertexHandle;
@@ -65,52 +66,13 @@ pub(super) fn cap_planar(
     check_simple(&q)?;
 
     // spade panics only on internal precision failures; treat that as "not applicable".
-    let run = std::panic::AssertUnwindSafe(|| triangulate(&q, min_angle_deg, max_new, chord_taken));
-    let built = std::panic::catch_unwind(run)
+    let run = std::panic::AssertUnwindSafe(|| triangulate(&q, min_angle_deg, max_new));
+    let (pts2, faces, complete) = std::panic::catch_unwind(run)
         .map_err(|_| "the constrained Delaunay triangulation failed".to_string())??;
-    let (cdt, faces, complete) = built;
-    if std::env::var("CAPDBG").is_ok() {
-        let mut on = 0;
-        let mut near = 0;
-        for v in n..cdt.num_vertices() {
-            let p = cdt.vertex(FixedVertexHandle::from_index(v)).position();
-            for i in 0..n {
-                let d = point_segment_distance([p.x, p.y], q[i], q[(i + 1) % n]);
-                if d < 1e-9 {
-                    on += 1;
-                } else if d < 0.05 {
-                    near += 1;
-                }
-            }
-        }
-        eprintln!(
-            "n={n} verts={} on={on} near={near} constraints={} faces={}",
-            cdt.num_vertices(),
-            cdt.num_constraints(),
-            faces.len()
-        );
-    }
-
-    // Local numbering: rim vertices 0..n are spade's first n vertices; the Steiner vertices that
-    // inner faces use come next.
-    let mut local = vec![usize::MAX; cdt.num_vertices()];
-    for (i, l) in local.iter_mut().enumerate().take(n) {
-        *l = i;
-    }
-    let mut steiner: Vec<usize> = Vec::new();
-    let mut cap_faces: Vec<[usize; 3]> = Vec::with_capacity(faces.len());
-    for f in &faces {
-        let mut t = [0usize; 3];
-        for k in 0..3 {
-            let v = f[k];
-            if local[v] == usize::MAX {
-                local[v] = n + steiner.len();
-                steiner.push(v);
-            }
-            t[k] = local[v];
-        }
-        cap_faces.push(t);
-    }
+    let mut imp = Improver::new(pts2, faces, n, chord_taken);
+    imp.split_taken_chords();
+    imp.run(4.0, max_new);
+    let (pts2, mut cap_faces) = imp.finish();
     // spade faces are counter-clockwise in (e1, e2); the cap must traverse rim edges against the
     // loop direction (the mesh holds i → i+1).
     let same_as_loop = cap_faces
@@ -123,7 +85,7 @@ pub(super) fn cap_planar(
     }
 
     // Lift: harmonic out-of-plane offset with the rim's offsets as boundary values.
-    let m = n + steiner.len();
+    let m = pts2.len();
     let mut offset = vec![0.0; m];
     let mut fixed = vec![false; m];
     for i in 0..n {
@@ -131,13 +93,8 @@ pub(super) fn cap_planar(
         fixed[i] = true;
     }
     harmonic_fill(&neighbours(m, &cap_faces), &fixed, &mut offset);
-    let new_points = steiner
-        .iter()
-        .enumerate()
-        .map(|(k, &v)| {
-            let p = cdt.vertex(FixedVertexHandle::from_index(v)).position();
-            c + e1 * (p.x * h) + e2 * (p.y * h) + nrm * offset[n + k]
-        })
+    let new_points = (n..m)
+        .map(|k| c + e1 * (pts2[k][0] * h) + e2 * (pts2[k][1] * h) + nrm * offset[k])
         .collect();
     Ok(PlanarCap {
         patch: Patch {
@@ -165,16 +122,13 @@ pub(super) fn neighbours(m: usize, faces: &[[usize; 3]]) -> Vec<Vec<usize>> {
     nb
 }
 
-type Triangulated = (Cdt, Vec<[usize; 3]>, bool);
+/// Points (rim first), counter-clockwise triangles, and whether refinement completed.
+type Planar2d = (Vec<[f64; 2]>, Vec<[usize; 3]>, bool);
 
-/// Refined CDT of the simple polygon `q`; returns the triangulation, its inner faces (spade
-/// vertex indices, counter-clockwise) and whether refinement completed.
-fn triangulate(
-    q: &[[f64; 2]],
-    min_angle_deg: f64,
-    max_new: usize,
-    chord_taken: &dyn Fn(usize, usize) -> bool,
-) -> Result<Triangulated, String> {
+/// The constrained Delaunay triangulation of the rim polygon `q` alone; errors when the polygon
+/// is not simple.
+fn rim_cdt(q: &[[f64; 2]]) -> Result<Cdt, String> {
+    const NOT_SIMPLE: &str = "projection onto its best-fit plane is not a simple polygon";
     let n = q.len();
     let mut cdt = Cdt::new();
     for (i, p) in q.iter().enumerate() {
@@ -191,70 +145,82 @@ fn triangulate(
             FixedVertexHandle::from_index((i + 1) % n),
         );
         if !cdt.can_add_constraint(a, b) {
-            return Err("projection onto its best-fit plane is not a simple polygon".into());
+            return Err(NOT_SIMPLE.into());
         }
         cdt.add_constraint(a, b);
         if !cdt.exists_constraint(a, b) {
-            return Err("projection onto its best-fit plane is not a simple polygon".into());
+            return Err(NOT_SIMPLE.into());
         }
     }
     if cdt.num_constraints() != n {
-        return Err("projection onto its best-fit plane is not a simple polygon".into());
+        return Err(NOT_SIMPLE.into());
     }
+    Ok(cdt)
+}
 
+/// Triangulation of the simple polygon `q` (coordinates in units of the target edge length) with
+/// interior points graded towards small rim features: returns the points (rim first), the
+/// counter-clockwise triangles inside the polygon, and whether refinement completed.
+///
+/// The interior points come from a full Ruppert refinement of the polygon, which may split rim
+/// edges; the split points are dropped (the rim must keep its vertices) and the rim with the
+/// remaining interior points is triangulated again.
+fn triangulate(q: &[[f64; 2]], min_angle_deg: f64, max_new: usize) -> Result<Planar2d, String> {
+    let n = q.len();
     let area = polygon_area(q).abs();
     // Vertex budget: several times what the area needs at the target size, within the caller's cap.
     let budget = ((8.0 * area / UNIT_TRIANGLE_AREA) as usize + 10 * n + 100).min(max_new);
-    let params = || {
+    let mut graded = rim_cdt(q)?;
+    let result = graded.refine(
         RefinementParameters::<f64>::new()
             .exclude_outer_faces(true)
-            .keep_constraint_edges()
             .with_angle_limit(AngleLimit::from_deg(min_angle_deg.clamp(0.0, 34.0)))
-            .with_max_allowed_area(1.2 * UNIT_TRIANGLE_AREA)
-            .with_max_additional_vertices(budget)
-    };
-    let mut result = cdt.refine(params());
-    // A chord joining two rim vertices that the mesh already joins would give an edge with four
-    // triangles: split such chords at their midpoint and refine again.
-    for _round in 0..8 {
-        let excluded: HashSet<_> = result.excluded_faces.iter().copied().collect();
-        let mut splits: Vec<Point2<f64>> = Vec::new();
-        for f in cdt.inner_faces() {
-            if excluded.contains(&f.fix()) {
-                continue;
-            }
-            for e in f.adjacent_edges() {
-                let (a, b) = (e.from().fix().index(), e.to().fix().index());
-                if a < n
-                    && b < n
-                    && a < b
-                    && (b - a) % n != 1
-                    && (a + n - b) % n != 1
-                    && chord_taken(a, b)
-                {
-                    let [pa, pb] = e.positions();
-                    splits.push(Point2::new(0.5 * (pa.x + pb.x), 0.5 * (pa.y + pb.y)));
-                }
-            }
+            .with_max_allowed_area(1.6 * UNIT_TRIANGLE_AREA)
+            .with_max_additional_vertices(budget),
+    );
+    let excluded: HashSet<_> = result.excluded_faces.iter().copied().collect();
+    let mut interior: Vec<Point2<f64>> = Vec::new();
+    for v in graded.vertices().skip(n) {
+        let on_rim = v.out_edges().any(|e| e.is_constraint_edge());
+        let inside = v.out_edges().any(|e| {
+            e.face()
+                .as_inner()
+                .is_some_and(|f| !excluded.contains(&f.fix()))
+        });
+        if inside && !on_rim {
+            interior.push(v.position());
         }
-        if splits.is_empty() {
-            let faces = cdt
-                .inner_faces()
-                .filter(|f| !excluded.contains(&f.fix()))
-                .map(|f| f.vertices().map(|v| v.fix().index()))
-                .collect();
-            if cdt.num_constraints() != n {
-                return Err("refinement split the rim".into());
-            }
-            return Ok((cdt, faces, result.refinement_complete));
-        }
-        for p in splits {
-            cdt.insert(p)
-                .map_err(|e| format!("chord split rejected ({e:?})"))?;
-        }
-        result = cdt.refine(params());
     }
-    Err("chords duplicating existing mesh edges could not be removed".into())
+
+    let mut cdt = rim_cdt(q)?;
+    for p in interior {
+        cdt.insert(p)
+            .map_err(|e| format!("interior point rejected ({e:?})"))?;
+    }
+    // A refinement with no vertex budget only classifies the faces inside and outside the rim.
+    let outer: HashSet<_> = cdt
+        .refine(
+            RefinementParameters::<f64>::new()
+                .exclude_outer_faces(true)
+                .keep_constraint_edges()
+                .with_max_additional_vertices(0),
+        )
+        .excluded_faces
+        .into_iter()
+        .collect();
+    if cdt.num_constraints() != n {
+        return Err("the triangulation split the rim".into());
+    }
+    let pts = cdt
+        .vertices()
+        .map(|v| [v.position().x, v.position().y])
+        .collect();
+    let faces = cdt
+        .inner_faces()
+        .filter(|f| !outer.contains(&f.fix()))
+        .map(|f| f.vertices().map(|v| v.fix().index()))
+        .collect();
+    Ok((pts, faces, result.refinement_complete))
 }
 
 /// Signed area of a polygon (positive when counter-clockwise).
