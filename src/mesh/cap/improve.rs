@@ -339,12 +339,14 @@ impl<'a> Improver<'a> {
                 best = qc;
                 bp = cen;
             }
-            let mut step = ring
+            // Pattern search only where the star is poor: most stars are fine after refinement.
+            let mut step = if best >= 0.5 { 0.0 } else { 1.0 };
+            step *= ring
                 .iter()
                 .map(|&r| (self.pts[r][0] - bp[0]).hypot(self.pts[r][1] - bp[1]))
                 .fold(f64::INFINITY, f64::min)
                 * 0.25;
-            for _ in 0..24 {
+            for _ in 0..if step > 0.0 { 24 } else { 0 } {
                 let mut improved = false;
                 for dir in 0..8 {
                     let ang = dir as f64 * std::f64::consts::FRAC_PI_4;
@@ -362,7 +364,7 @@ impl<'a> Improver<'a> {
             }
             if best > start + 1e-9 {
                 self.pts[v] = bp;
-                changed = true;
+                changed |= best > start + 1e-4;
             }
         }
         changed
