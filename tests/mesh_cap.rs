@@ -225,15 +225,18 @@ fn wavy_rim_gets_smooth_harmonic_cap() {
         "{}",
         rep.max_cap_aspect_ratio
     );
-    // Top cap vertices: within the rim's height range (maximum principle) and, like the harmonic
-    // function (ρ/r)³·amp·sin 3θ, nearly flat near the axis.
+    // Top cap vertices: within the rim's height range (maximum principle), close to the harmonic
+    // function h + amp·(ρ/r)³·sin 3θ that the rim's heights define, so nearly flat near the axis.
     let mut central = 0;
+    let mut worst_dev: f64 = 0.0;
     for p in &out.vertices[m.num_vertices()..] {
         if p.z < h / 2.0 {
             continue;
         }
         assert!(p.z >= h - amp - 1e-9 && p.z <= h + amp + 1e-9, "{p}");
         let rho = p.x.hypot(p.y);
+        let harmonic = h + amp * (rho / r).powi(3) * (3.0 * p.y.atan2(p.x)).sin();
+        worst_dev = worst_dev.max((p.z - harmonic).abs());
         if rho < 0.5 * r {
             central += 1;
             assert!(
@@ -243,6 +246,10 @@ fn wavy_rim_gets_smooth_harmonic_cap() {
         }
     }
     assert!(central > 5);
+    assert!(
+        worst_dev < 0.05 * amp,
+        "cap departs from the harmonic surface by {worst_dev}"
+    );
     // Smooth: normals of adjacent top-cap triangles differ by little.
     let top: Vec<usize> = rep
         .cap_faces
@@ -401,6 +408,69 @@ fn rim_vertex_joined_by_an_interior_edge_gets_no_duplicate_chord() {
     check_closed_oriented(&out).unwrap();
     assert!(
         rep.max_cap_aspect_ratio <= 10.0,
+        "{}",
+        rep.max_cap_aspect_ratio
+    );
+}
+
+#[test]
+fn degenerate_rim_edge_is_collapsed_before_capping() {
+    // A tube whose top rim edge t1 → t0 is split by a vertex s a rounding error (1e-7 of an edge)
+    // away from t0: the sliver (w, s, t0) makes the rim edge s–t0 tiny, and a cap triangle on an
+    // edge of length e whose longest edge is L has an aspect ratio of at least (√3/2)·L/e.
+    let (r, h, n) = (1.0, 3.0, 24);
+    let mut m = tube(r, n, 4, |_| 0.0, |_| h);
+    let (t0, t1) = ((3 * n) as u32, (3 * n + 1) as u32);
+    let edge = m.vertices[t1 as usize] - m.vertices[t0 as usize];
+    let s = m.vertices.len() as u32;
+    m.vertices.push(m.vertices[t0 as usize] + edge * 1e-7);
+    let f = m
+        .faces
+        .iter()
+        .position(|t| (0..3).any(|k| t[k] == t1 && t[(k + 1) % 3] == t0))
+        .unwrap();
+    let w = *m.faces[f].iter().find(|&&v| v != t0 && v != t1).unwrap();
+    m.faces[f] = [w, t1, s];
+    m.faces.push([w, s, t0]);
+    let sliver = m.num_faces() - 1;
+    check_closed_oriented(&m).unwrap_err();
+    assert_eq!(boundary_loops(&m).len(), 2);
+
+    let (out, rep) = cap_holes(&m, &CapOptions::default()).unwrap();
+    check_closed_oriented(&out).unwrap();
+    assert_eq!(rep.welded_rim_vertices, vec![[s, t0]]);
+    assert_eq!(rep.removed_faces, vec![sliver]);
+    assert_eq!(rep.cap_faces.start, m.num_faces() - 1);
+    assert!(
+        out.faces.iter().all(|t| !t.contains(&t0)),
+        "t0 merged into s"
+    );
+    assert_eq!(out.vertices[..m.num_vertices()], m.vertices[..]);
+    assert!(
+        rep.max_cap_aspect_ratio <= 10.0,
+        "{}",
+        rep.max_cap_aspect_ratio
+    );
+    assert_eq!(rep.messages.len(), 1, "{:?}", rep.messages);
+    assert!(
+        rep.messages[0].contains("merged 1 rim vertices"),
+        "{}",
+        rep.messages[0]
+    );
+    let exact = polygon_area(r, n) * h;
+    assert!((signed_volume(&out) - exact).abs() < 1e-6 * exact);
+
+    // Without the collapse the mesh still closes, but the cap cannot grade well enough around
+    // the tiny edge.
+    let keep = CapOptions {
+        rim_weld_fraction: 0.0,
+        ..Default::default()
+    };
+    let (out, rep) = cap_holes(&m, &keep).unwrap();
+    check_closed_oriented(&out).unwrap();
+    assert!(rep.welded_rim_vertices.is_empty() && rep.removed_faces.is_empty());
+    assert!(
+        rep.max_cap_aspect_ratio > 10.0,
         "{}",
         rep.max_cap_aspect_ratio
     );

@@ -1,11 +1,12 @@
-//! Discrete harmonic interpolation over a vertex graph (uniform "umbrella" Laplacian) with fixed
-//! boundary values, solved by conjugate gradients: the membrane fairing of Liepa (2003) and the
-//! out-of-plane offset of planar caps.
+//! Discrete harmonic interpolation over a weighted vertex graph with fixed boundary values, solved
+//! by conjugate gradients: with unit weights the "umbrella" membrane fairing of Liepa (2003), with
+//! cotangent weights the linear finite-element solution of Laplace's equation (Pinkall and
+//! Polthier 1993) used for the out-of-plane offset of planar caps.
 
-/// Overwrites `values[i]` for every vertex with `fixed[i] == false` so that each such value is
-/// the mean of its neighbours' values (neighbours listed in `nbrs`), keeping fixed values. Free
-/// vertices with no path to a fixed vertex keep their value.
-pub(super) fn harmonic_fill(nbrs: &[Vec<usize>], fixed: &[bool], values: &mut [f64]) {
+/// Overwrites `values[i]` for every vertex with `fixed[i] == false` so that Σ_j w_ij (x_i − x_j)
+/// = 0 over its neighbours `nbrs[i]` = [(j, w_ij)] (symmetric weights), keeping fixed values.
+/// Free vertices with no path to a fixed vertex keep their value.
+pub(super) fn harmonic_fill(nbrs: &[Vec<(usize, f64)>], fixed: &[bool], values: &mut [f64]) {
     let n = values.len();
     // Free unknowns numbered 0..m.
     let mut slot = vec![usize::MAX; n];
@@ -25,16 +26,17 @@ pub(super) fn harmonic_fill(nbrs: &[Vec<usize>], fixed: &[bool], values: &mut [f
     for (k, &i) in free.iter().enumerate() {
         b[k] = nbrs[i]
             .iter()
-            .filter(|&&j| slot[j] == usize::MAX)
-            .map(|&j| values[j])
+            .filter(|&&(j, _)| slot[j] == usize::MAX)
+            .map(|&(j, w)| w * values[j])
             .sum();
     }
     let apply = |x: &[f64], y: &mut [f64]| {
         for (k, &i) in free.iter().enumerate() {
-            let mut s = nbrs[i].len() as f64 * x[k];
-            for &j in &nbrs[i] {
+            let mut s = 0.0;
+            for &(j, w) in &nbrs[i] {
+                s += w * x[k];
                 if slot[j] != usize::MAX {
-                    s -= x[slot[j]];
+                    s -= w * x[slot[j]];
                 }
             }
             y[k] = s;
@@ -88,7 +90,13 @@ mod tests {
     #[test]
     fn path_graph_interpolates_linearly() {
         // 0 - 1 - 2 - 3 - 4 with ends fixed at 0 and 4: the harmonic values are 0,1,2,3,4.
-        let nbrs = vec![vec![1], vec![0, 2], vec![1, 3], vec![2, 4], vec![3]];
+        let nbrs = vec![
+            vec![(1, 1.0)],
+            vec![(0, 1.0), (2, 1.0)],
+            vec![(1, 1.0), (3, 1.0)],
+            vec![(2, 1.0), (4, 1.0)],
+            vec![(3, 1.0)],
+        ];
         let fixed = [true, false, false, false, true];
         let mut v = [0.0, 7.0, -3.0, 2.0, 4.0];
         harmonic_fill(&nbrs, &fixed, &mut v);

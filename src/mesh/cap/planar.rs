@@ -10,7 +10,7 @@ use spade::handles::FixedVertexHandle;
 use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 
 type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>>;
 
@@ -92,7 +92,7 @@ pub(super) fn cap_planar(
         offset[i] = (pts[i] - c).dot(&nrm);
         fixed[i] = true;
     }
-    harmonic_fill(&neighbours(m, &cap_faces), &fixed, &mut offset);
+    harmonic_fill(&cotan_neighbours(&pts2, &cap_faces), &fixed, &mut offset);
     let new_points = (n..m)
         .map(|k| c + e1 * (pts2[k][0] * h) + e2 * (pts2[k][1] * h) + nrm * offset[k])
         .collect();
@@ -105,19 +105,47 @@ pub(super) fn cap_planar(
     })
 }
 
-/// Vertex adjacency of a triangle list over `m` vertices.
-pub(super) fn neighbours(m: usize, faces: &[[usize; 3]]) -> Vec<Vec<usize>> {
-    let mut nb: Vec<Vec<usize>> = vec![Vec::new(); m];
+/// Vertex adjacency of a triangle list over `m` vertices, with unit weights.
+pub(super) fn neighbours(m: usize, faces: &[[usize; 3]]) -> Vec<Vec<(usize, f64)>> {
+    let mut nb: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
     for t in faces {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
-            if !nb[a].contains(&b) {
-                nb[a].push(b);
-            }
-            if !nb[b].contains(&a) {
-                nb[b].push(a);
+            if !nb[a].iter().any(|&(v, _)| v == b) {
+                nb[a].push((b, 1.0));
+                nb[b].push((a, 1.0));
             }
         }
+    }
+    nb
+}
+
+/// Vertex adjacency of a planar triangulation with cotangent weights ½(cot α + cot β), the
+/// stiffness matrix of linear finite elements; each weight is kept above a small positive floor
+/// so that the discrete maximum principle holds.
+fn cotan_neighbours(pts: &[[f64; 2]], faces: &[[usize; 3]]) -> Vec<Vec<(usize, f64)>> {
+    let mut w: HashMap<(usize, usize), f64> = HashMap::new();
+    for t in faces {
+        for k in 0..3 {
+            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            let (u, v) = (
+                [pts[a][0] - pts[c][0], pts[a][1] - pts[c][1]],
+                [pts[b][0] - pts[c][0], pts[b][1] - pts[c][1]],
+            );
+            let cross = (u[0] * v[1] - u[1] * v[0]).abs();
+            let cot = if cross > 0.0 {
+                (u[0] * v[0] + u[1] * v[1]) / cross
+            } else {
+                0.0
+            };
+            *w.entry((a.min(b), a.max(b))).or_insert(0.0) += 0.5 * cot;
+        }
+    }
+    let mut nb: Vec<Vec<(usize, f64)>> = vec![Vec::new(); pts.len()];
+    for ((a, b), x) in w {
+        let x = x.max(1e-3);
+        nb[a].push((b, x));
+        nb[b].push((a, x));
     }
     nb
 }
