@@ -2,17 +2,26 @@
 //!
 //! Each boundary loop is projected onto its best-fit plane (principal component analysis of the
 //! loop's vertices). When the projection is a simple polygon, it is triangulated with spade's
-//! constrained Delaunay triangulation and refined (Ruppert/Chew Delaunay refinement, constraint
-//! edges kept whole so the rim gets no new vertices) to triangles of about the target edge length;
-//! the cap is then lifted back: rim vertices keep their exact positions and interior vertices get
-//! an out-of-plane offset that is harmonic over the cap's vertex graph, so non-planar rims get a
-//! smooth cap. When the projection is not simple (or the planar construction fails), the loop is
-//! closed by the hole filling of Liepa (2003, "Filling holes in meshes", Eurographics SGP):
-//! minimum-area triangulation of the 3D polygon by dynamic programming (a centroid fan for very
-//! long loops), refinement by centroid splits with Delaunay edge relaxation, and membrane fairing.
-//! Cap triangles are wound opposite to the loop direction, which is how the adjacent mesh
-//! triangles traverse the rim, so a consistently oriented input gives a consistently oriented
-//! closed output; the result is finally flipped as a whole if its enclosed volume is negative.
+//! constrained Delaunay triangulation: a full Ruppert/Chew Delaunay refinement of the polygon to
+//! triangles of about the target edge length supplies interior points graded towards small rim
+//! features, the points it put on the rim are dropped (the rim must keep its vertices, or the mesh
+//! would get T-junctions), and the rim with the remaining points is triangulated again; local
+//! optimisation (quality-raising flips, max-min smoothing, vertex removal, longest-edge bisection)
+//! then repairs the triangles next to the rim. The cap is lifted back with rim vertices at their
+//! exact positions and interior vertices offset from the plane by the harmonic (linear finite
+//! element) interpolation of the rim's offsets, so non-planar rims get a smooth cap.
+//!
+//! When the projection is not simple (or the planar construction fails), the loop is closed by
+//! the hole filling of Liepa (2003, "Filling holes in meshes", Eurographics SGP): minimum-area
+//! triangulation of the 3D polygon by dynamic programming (a centroid fan for very long loops),
+//! refinement by centroid splits with Delaunay edge relaxation, and membrane fairing.
+//!
+//! Rim edges shorter than a tiny fraction of the target edge length (vertices a rounding error
+//! apart) are collapsed first: no cap triangle on such an edge can have a bounded aspect ratio.
+//! Cap chords never duplicate an existing edge. Cap triangles are wound opposite to the loop
+//! direction, which is how the adjacent mesh triangles traverse the rim, so a consistently
+//! oriented input gives a consistently oriented closed output; the result is finally flipped as a
+//! whole if its enclosed volume is negative.
 
 mod fill;
 mod harmonic;
@@ -33,8 +42,8 @@ pub struct CapOptions {
     /// Target edge length of cap triangles, in world (file) units. `None` uses, for each loop, the
     /// mean length of that loop's own edges.
     pub target_edge_length: Option<f64>,
-    /// Minimum angle for the Delaunay refinement of planar caps, in degrees (values above 30
-    /// over-refine; 0 disables angle-driven refinement).
+    /// Minimum angle of the Delaunay refinement that places the interior points of planar caps,
+    /// in degrees (values above 30 over-refine; 0 disables angle-driven refinement).
     pub min_angle_deg: f64,
     /// Flip the whole result when its signed enclosed volume is negative, so that it faces outward.
     pub orient_outward: bool,

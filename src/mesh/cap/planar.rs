@@ -1,6 +1,7 @@
 //! Planar caps: best-fit plane by principal component analysis, simplicity test of the projected
-//! polygon, spade's constrained Delaunay triangulation with Delaunay refinement (Ruppert/Chew,
-//! constraint edges kept whole), and lifting back with a harmonic out-of-plane offset.
+//! polygon, spade's constrained Delaunay triangulation with interior points from Ruppert/Chew
+//! Delaunay refinement (rim kept whole), quality optimisation, and lifting back with a harmonic
+//! (cotangent-weight finite element) out-of-plane offset.
 
 use super::harmonic::harmonic_fill;
 use super::improve::Improver;
@@ -69,9 +70,10 @@ pub(super) fn cap_planar(
     let run = std::panic::AssertUnwindSafe(|| triangulate(&q, min_angle_deg, max_new));
     let (pts2, faces, complete) = std::panic::catch_unwind(run)
         .map_err(|_| "the constrained Delaunay triangulation failed".to_string())??;
+    let left = max_new.saturating_sub(pts2.len() - n);
     let mut imp = Improver::new(pts2, faces, n, chord_taken);
     imp.split_taken_chords();
-    imp.run(4.0, max_new);
+    imp.run(4.0, left);
     let (pts2, mut cap_faces) = imp.finish();
     // spade faces are counter-clockwise in (e1, e2); the cap must traverse rim edges against the
     // loop direction (the mesh holds i → i+1).
@@ -307,18 +309,42 @@ fn check_simple(q: &[[f64; 2]]) -> Result<(), String> {
             ]
         })
         .collect();
-    for i in 0..n {
-        for j in i + 2..n {
-            if i == 0 && j == n - 1 {
-                continue; // adjacent through vertex 0
+    // Candidate pairs from a uniform grid of cells about one mean edge wide.
+    let mean = bbox
+        .iter()
+        .map(|b| (b[1] - b[0]).max(b[3] - b[2]))
+        .sum::<f64>()
+        / n as f64;
+    let (x0, y0) = (
+        bbox.iter().map(|b| b[0]).fold(f64::INFINITY, f64::min),
+        bbox.iter().map(|b| b[2]).fold(f64::INFINITY, f64::min),
+    );
+    let cell = mean.max(1e-12);
+    let mut grid: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+    for (i, b) in bbox.iter().enumerate() {
+        let cx = |x: f64| ((x - x0) / cell).floor() as i64;
+        let cy = |y: f64| ((y - y0) / cell).floor() as i64;
+        for gx in cx(b[0])..=cx(b[1]) {
+            for gy in cy(b[2])..=cy(b[3]) {
+                grid.entry((gx, gy)).or_default().push(i);
             }
-            let (bi, bj) = (bbox[i], bbox[j]);
-            if bi[1] < bj[0] || bj[1] < bi[0] || bi[3] < bj[2] || bj[3] < bi[2] {
-                continue;
-            }
-            let ((a, b), (c, d)) = (seg(i), seg(j));
-            if segments_close(a, b, c, d, tol) {
-                return Err(NOT_SIMPLE.into());
+        }
+    }
+    for segs in grid.values() {
+        for (u, &i) in segs.iter().enumerate() {
+            for &j in &segs[u + 1..] {
+                let (i, j) = (i.min(j), i.max(j));
+                if j == i + 1 || (i == 0 && j == n - 1) {
+                    continue; // adjacent edges share a vertex
+                }
+                let (bi, bj) = (bbox[i], bbox[j]);
+                if bi[1] < bj[0] || bj[1] < bi[0] || bi[3] < bj[2] || bj[3] < bi[2] {
+                    continue;
+                }
+                let ((a, b), (c, d)) = (seg(i), seg(j));
+                if segments_close(a, b, c, d, tol) {
+                    return Err(NOT_SIMPLE.into());
+                }
             }
         }
     }
