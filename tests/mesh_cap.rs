@@ -499,6 +499,49 @@ fn degenerate_rim_edge_is_collapsed_before_capping() {
 }
 
 #[test]
+fn holes_touching_at_a_vertex_are_closed() {
+    // A 5 × 5 grid on a paraboloid with quads (1,1) and (2,2) removed: the two holes share the
+    // grid vertex (2,2), so their boundary passes twice through it.
+    let id = |i: usize, j: usize| (j * 5 + i) as u32;
+    let mut v = Vec::new();
+    for j in 0..5 {
+        for i in 0..5 {
+            let (x, y) = (i as f64 - 2.0, j as f64 - 2.0);
+            v.push(Point3::new(x, y, 0.1 * (x * x + y * y)));
+        }
+    }
+    let mut f = Vec::new();
+    for j in 0..4 {
+        for i in 0..4 {
+            if (i, j) == (1, 1) || (i, j) == (2, 2) {
+                continue;
+            }
+            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let m = TriMesh::new(v, f);
+    let total_rim: usize = boundary_loops(&m).iter().map(|l| l.len()).sum();
+    assert_eq!(total_rim, 16 + 8);
+    let (out, rep) = cap_holes(&m, &CapOptions::default()).unwrap();
+    check_closed_oriented(&out).unwrap();
+    // Outer square plus the two unit squares, each capped on its own.
+    assert_eq!(rep.loops.len(), 3, "{rep:?}");
+    // boundary_loops may walk the two holes as one loop through the shared vertex: it is then
+    // split into two simple loops, and said so.
+    let mut sizes: Vec<usize> = rep.loops.iter().map(|l| l.rim_vertices).collect();
+    sizes.sort_unstable();
+    assert_eq!(sizes, vec![4, 4, 16]);
+    if rep.loops_capped == 2 {
+        assert!(rep.messages[0].contains("passes more than once through a vertex"));
+    } else {
+        assert_eq!(rep.loops_capped, 3);
+    }
+    assert!(rep.fallback_loops.is_empty());
+    assert!(rep.max_cap_aspect_ratio <= 10.0);
+}
+
+#[test]
 fn closed_mesh_is_unchanged_except_orientation() {
     // Octahedron, outward.
     let v = vec![

@@ -316,7 +316,7 @@ fn cap_one(
         Ok(planar::PlanarCap { patch, complete }) => {
             if !complete {
                 messages.push(format!(
-                    "loop {li} ({n} vertices): cap refinement stopped at the limit of {max_new} new vertices"
+                    "loop {li} ({n} vertices): cap refinement stopped at its vertex budget; the cap is coarser than the target"
                 ));
             }
             return (patch, CapMethod::PlanarCdt);
