@@ -1,1 +1,0 @@
-//! Capping of boundary loops (open vessel ends and holes) with constrained Delaunay triangulations.

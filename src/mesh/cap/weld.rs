@@ -1,0 +1,151 @@
+//! Collapse of degenerate rim edges before capping. A rim edge far shorter than its neighbours
+//! (two rim vertices a float rounding apart, as left by cutting or format conversion) forces a
+//! cap triangle of huge aspect ratio whatever the cap, since a triangle on an edge of length e
+//! whose longest edge is L has aspect ratio at least (√3/2)·L/e. Such an edge is removed by
+//! merging its second vertex into its first (a boundary edge collapse): the mesh's sliver
+//! triangle on that edge disappears and the other triangles of the merged vertex move by less
+//! than the edge length. Collapses that would break manifoldness (link condition) or flip a
+//! triangle are skipped.
+
+use nalgebra::Point3;
+use std::collections::{HashMap, HashSet};
+
+/// The input's triangles under edge collapses.
+pub(super) struct Working {
+    pub faces: Vec<[u32; 3]>,
+    pub alive: Vec<bool>,
+    /// Triangles of each vertex (alive ones; kept up to date).
+    inc: Vec<Vec<u32>>,
+}
+
+impl Working {
+    pub fn new(num_vertices: usize, faces: &[[u32; 3]]) -> Self {
+        let mut inc = vec![Vec::new(); num_vertices];
+        for (f, t) in faces.iter().enumerate() {
+            for &v in t {
+                if !inc[v as usize].contains(&(f as u32)) {
+                    inc[v as usize].push(f as u32);
+                }
+            }
+        }
+        Working {
+            faces: faces.to_vec(),
+            alive: vec![true; faces.len()],
+            inc,
+        }
+    }
+
+    fn neighbours(&self, v: u32) -> HashSet<u32> {
+        let mut s = HashSet::new();
+        for &f in &self.inc[v as usize] {
+            for &w in &self.faces[f as usize] {
+                if w != v {
+                    s.insert(w);
+                }
+            }
+        }
+        s
+    }
+
+    /// Merges vertex `b` into `a` across the rim edge a → b if that is safe; returns the removed
+    /// triangle.
+    fn collapse(&mut self, vertices: &[Point3<f64>], a: u32, b: u32) -> Option<usize> {
+        // The one triangle holding a → b.
+        let holder = self.inc[a as usize].iter().copied().find(|&f| {
+            let t = self.faces[f as usize];
+            (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b)
+        });
+        let f = holder?;
+        let t = self.faces[f as usize];
+        let &w = t.iter().find(|&&v| v != a && v != b)?;
+        // Link condition for a boundary edge: a and b share exactly the neighbour w.
+        let common: Vec<u32> = self
+            .neighbours(a)
+            .intersection(&self.neighbours(b))
+            .copied()
+            .collect();
+        if common != [w] {
+            return None;
+        }
+        // No other triangle of b may flip or degenerate when b moves onto a.
+        let pa = vertices[a as usize];
+        for &g in &self.inc[b as usize] {
+            if g == f {
+                continue;
+            }
+            let t = self.faces[g as usize];
+            let p = |v: u32, moved: bool| {
+                if moved && v == b {
+                    pa
+                } else {
+                    vertices[v as usize]
+                }
+            };
+            let normal = |moved: bool| {
+                let (x, y, z) = (p(t[0], moved), p(t[1], moved), p(t[2], moved));
+                (y - x).cross(&(z - x))
+            };
+            let (before, after) = (normal(false), normal(true));
+            let agree = after.dot(&before);
+            if agree.is_nan() || agree <= 0.0 || after.norm() <= 1e-6 * before.norm() {
+                return None;
+            }
+        }
+        self.alive[f as usize] = false;
+        for &v in &t {
+            self.inc[v as usize].retain(|&g| g != f);
+        }
+        let moved: Vec<u32> = std::mem::take(&mut self.inc[b as usize]);
+        for g in moved {
+            for v in self.faces[g as usize].iter_mut() {
+                if *v == b {
+                    *v = a;
+                }
+            }
+            self.inc[a as usize].push(g);
+        }
+        Some(f as usize)
+    }
+}
+
+/// Collapses, in the loop `lp` (rim half-edges lp[i] → lp[i+1]), every rim edge shorter than
+/// `min_len` (world units) whose collapse is safe, shortest first, keeping at least 3 vertices.
+/// Vertices in `shared` (on several loops, or twice on one) are left alone. Returns the merged
+/// pairs [kept, removed] and the indices of the removed triangles.
+pub(super) fn collapse_short_rim_edges(
+    vertices: &[Point3<f64>],
+    work: &mut Working,
+    lp: &mut Vec<u32>,
+    min_len: f64,
+    shared: &HashMap<u32, usize>,
+) -> (Vec<[u32; 2]>, Vec<usize>) {
+    let mut merged = Vec::new();
+    let mut removed = Vec::new();
+    let mut refused: HashSet<(u32, u32)> = HashSet::new();
+    loop {
+        let n = lp.len();
+        if n <= 3 {
+            break;
+        }
+        let len = |i: usize| (vertices[lp[(i + 1) % n] as usize] - vertices[lp[i] as usize]).norm();
+        let cand = (0..n)
+            .filter(|&i| {
+                let (a, b) = (lp[i], lp[(i + 1) % n]);
+                len(i) < min_len
+                    && !refused.contains(&(a, b))
+                    && shared.get(&a).is_none_or(|&c| c <= 1)
+                    && shared.get(&b).is_none_or(|&c| c <= 1)
+            })
+            .min_by(|&i, &j| len(i).total_cmp(&len(j)));
+        let Some(i) = cand else { break };
+        let (a, b) = (lp[i], lp[(i + 1) % n]);
+        if let Some(f) = work.collapse(vertices, a, b) {
+            removed.push(f);
+            merged.push([a, b]);
+            lp.remove((i + 1) % n);
+        } else {
+            refused.insert((a, b));
+        }
+    }
+    (merged, removed)
+}
