@@ -10,7 +10,7 @@ use nalgebra::{Point3, Vector3};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
-use vesselmsr::bvh::{MeshBvh, WindingNumber};
+use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
 use vesselmsr::io::read_mesh;
 use vesselmsr::mesh::cap::{cap_holes, CapOptions};
 use vesselmsr::mesh::info::mesh_info;
@@ -35,7 +35,9 @@ fn time<T>(mut f: impl FnMut() -> T) -> Duration {
 fn query_points(mesh: &TriMesh, n: usize) -> Vec<Point3<f64>> {
     let mut state = 0x2545_F491_4F6C_DD1Du64;
     let mut next = move || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
     let (mut lo, mut hi) = (mesh.vertices[0], mesh.vertices[0]);
@@ -49,7 +51,8 @@ fn query_points(mesh: &TriMesh, n: usize) -> Vec<Point3<f64>> {
         .map(|i| {
             let r = Vector3::new(next(), next(), next());
             if i % 2 == 0 {
-                let v = mesh.vertices[(next() * mesh.num_vertices() as f64) as usize % mesh.num_vertices()];
+                let v = mesh.vertices
+                    [(next() * mesh.num_vertices() as f64) as usize % mesh.num_vertices()];
                 v + (r * 2.0 - Vector3::repeat(1.0)) * 2.0 * edge
             } else {
                 lo - 0.05 * size + (1.1 * size).component_mul(&r)
@@ -68,12 +71,19 @@ impl Reference {
         let python = std::env::var_os("VESSELMSR_PYTHON")
             .map(PathBuf::from)
             .unwrap_or_else(|| root.join("reference/.venv/bin/python"));
-        python.exists().then(|| Reference { python, script: root.join("reference/oracle.py") })
+        python.exists().then(|| Reference {
+            python,
+            script: root.join("reference/oracle.py"),
+        })
     }
 
     /// The oracle's own timing ("seconds": the computation only, not Python start-up or loading).
     fn seconds(&self, args: &[&std::ffi::OsStr]) -> Option<f64> {
-        let out = Command::new(&self.python).arg(&self.script).args(args).output().ok()?;
+        let out = Command::new(&self.python)
+            .arg(&self.script)
+            .args(args)
+            .output()
+            .ok()?;
         if !out.status.success() {
             eprintln!("reference failed: {}", String::from_utf8_lossy(&out.stderr));
             return None;
@@ -85,11 +95,22 @@ impl Reference {
     fn query_seconds(&self, command: &str, mesh: &Path, points: &[Point3<f64>]) -> Option<f64> {
         let dir = tempfile::tempdir().ok()?;
         let (input, output) = (dir.path().join("p.f64"), dir.path().join("o.f64"));
-        let bytes: Vec<u8> = points.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(f64::to_le_bytes).collect();
+        let bytes: Vec<u8> = points
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .flat_map(f64::to_le_bytes)
+            .collect();
         std::fs::write(&input, bytes).ok()?;
         // Best of three, as our side takes a median of several runs.
         (0..3)
-            .filter_map(|_| self.seconds(&[command.as_ref(), mesh.as_os_str(), input.as_os_str(), output.as_os_str()]))
+            .filter_map(|_| {
+                self.seconds(&[
+                    command.as_ref(),
+                    mesh.as_os_str(),
+                    input.as_os_str(),
+                    output.as_os_str(),
+                ])
+            })
             .reduce(f64::min)
     }
 }
@@ -117,24 +138,68 @@ fn main() {
     if reference.is_none() {
         println!("notice: reference/.venv not found: reference timings skipped (bash tests/run_all.sh creates it)");
     }
-    println!("vesselmsr foundation benchmark ({} rayon threads)", rayon::current_num_threads());
+    println!(
+        "vesselmsr foundation benchmark ({} rayon threads)",
+        rayon::current_num_threads()
+    );
 
     let cortex = read_mesh(&cortex_path).expect("data/ cortex reads");
     let aorta = read_mesh(&aorta_path).expect("data/ aorta reads");
     let f = cortex.num_faces();
-    row("read cortex STL (triangles/s)", f, time(|| read_mesh(&cortex_path).unwrap()), None);
-    let check = reference.as_ref().and_then(|r| r.seconds(&["info".as_ref(), cortex_path.as_os_str()]));
-    row("info cortex (triangles/s)", f, time(|| mesh_info(&cortex)), check);
+    row(
+        "read cortex STL (triangles/s)",
+        f,
+        time(|| read_mesh(&cortex_path).unwrap()),
+        None,
+    );
+    let check = reference
+        .as_ref()
+        .and_then(|r| r.seconds(&["info".as_ref(), cortex_path.as_os_str()]));
+    row(
+        "info cortex (triangles/s)",
+        f,
+        time(|| mesh_info(&cortex)),
+        check,
+    );
     let fa = aorta.num_faces();
-    row("cap aorta open ends (triangles/s)", fa, time(|| cap_holes(&aorta, &CapOptions::default()).unwrap()), None);
-    row("BVH build cortex (triangles/s)", f, time(|| MeshBvh::new(&cortex)), None);
-    row("winding hierarchy build cortex (triangles/s)", f, time(|| WindingNumber::new(&cortex)), None);
+    row(
+        "cap aorta open ends (triangles/s)",
+        fa,
+        time(|| cap_holes(&aorta, &CapOptions::default()).unwrap()),
+        None,
+    );
+    row(
+        "BVH build cortex (triangles/s)",
+        f,
+        time(|| MeshBvh::new(&cortex)),
+        None,
+    );
+    row(
+        "winding hierarchy build cortex (triangles/s)",
+        f,
+        time(|| WindingNumber::new(&cortex, WindingOptions::default())),
+        None,
+    );
 
     let points = query_points(&cortex, 100_000);
     let bvh = MeshBvh::new(&cortex);
-    let r = reference.as_ref().and_then(|r| r.query_seconds("closest", &cortex_path, &points));
-    row("closest point, 100k points (queries/s)", points.len(), time(|| bvh.closest_points(&points)), r);
-    let wn = WindingNumber::new(&cortex);
-    let r = reference.as_ref().and_then(|r| r.query_seconds("winding", &cortex_path, &points));
-    row("fast winding number, 100k points (queries/s)", points.len(), time(|| wn.winding_numbers(&points)), r);
+    let r = reference
+        .as_ref()
+        .and_then(|r| r.query_seconds("closest", &cortex_path, &points));
+    row(
+        "closest point, 100k points (queries/s)",
+        points.len(),
+        time(|| bvh.closest_points(&points)),
+        r,
+    );
+    let wn = WindingNumber::new(&cortex, WindingOptions::default());
+    let r = reference
+        .as_ref()
+        .and_then(|r| r.query_seconds("winding", &cortex_path, &points));
+    row(
+        "fast winding number, 100k points (queries/s)",
+        points.len(),
+        time(|| wn.winding_numbers(&points)),
+        r,
+    );
 }

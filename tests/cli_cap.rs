@@ -33,12 +33,21 @@ fn cap_real_meshes_is_watertight_outward_and_well_shaped() {
         assert_eq!(info["boundary_loops"], 0, "{file}");
         let reference = oracle.check(&output);
         println!("{file}: oracle {reference}");
-        assert_eq!(reference["manifold_status"], "NoError", "{file}: manifold3d verdict");
-        let (vol, ref_vol) = (info["volume"].as_f64().unwrap(), reference["pymeshlab_volume"].as_f64().unwrap());
+        assert_eq!(
+            reference["manifold_status"], "NoError",
+            "{file}: manifold3d verdict"
+        );
+        let (vol, ref_vol) = (
+            info["volume"].as_f64().unwrap(),
+            reference["pymeshlab_volume"].as_f64().unwrap(),
+        );
         let rel = (vol - ref_vol).abs() / ref_vol;
         println!("{file}: capped volume {vol} vs pymeshlab {ref_vol} (rel {rel:.2e})");
         assert!(rel < 1e-6, "{file}: volume {vol} vs pymeshlab {ref_vol}");
-        assert!(info["signed_volume"].as_f64().unwrap() > 0.0, "{file}: outward means positive volume");
+        assert!(
+            info["signed_volume"].as_f64().unwrap() > 0.0,
+            "{file}: outward means positive volume"
+        );
     }
 }
 
@@ -48,12 +57,25 @@ fn cap_flips_inward_input_unless_told_not_to() {
     let tmp = tempfile::tempdir().unwrap();
     let input = dir.join("aorta_abdominal_capped.stl");
     let out = tmp.path().join("kept.stl");
-    let report = vesselmsr_json(&["cap", "--json", "--no-orient", input.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let report = vesselmsr_json(&[
+        "cap",
+        "--json",
+        "--no-orient",
+        input.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     assert_eq!(report["input"]["orientation"], "inward");
     assert_eq!(report["output"]["orientation"], "inward");
     assert_eq!(report["cap"]["flipped"], false);
     let out2 = tmp.path().join("flipped.stl");
-    let report = vesselmsr_json(&["cap", "--json", input.to_str().unwrap(), "-o", out2.to_str().unwrap()]);
+    let report = vesselmsr_json(&[
+        "cap",
+        "--json",
+        input.to_str().unwrap(),
+        "-o",
+        out2.to_str().unwrap(),
+    ]);
     assert_eq!(report["output"]["orientation"], "outward");
     assert_eq!(report["cap"]["flipped"], true);
 }
@@ -64,7 +86,13 @@ fn cap_writes_every_format() {
     let tmp = tempfile::tempdir().unwrap();
     for ext in ["stl", "obj", "ply", "PLY"] {
         let out = tmp.path().join(format!("capped.{ext}"));
-        let report = vesselmsr_json(&["cap", "--json", input.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+        let report = vesselmsr_json(&[
+            "cap",
+            "--json",
+            input.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
         let info = vesselmsr_json(&["info", "--json", out.to_str().unwrap()]);
         assert_eq!(info["watertight"], true, "{ext}");
         assert_eq!(info["faces"], report["output"]["faces"], "{ext}");

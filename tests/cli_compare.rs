@@ -16,7 +16,14 @@ fn uv_sphere_obj(r: f64, n: usize) -> String {
         let theta = PI * i as f64 / rings as f64;
         for j in 0..n {
             let phi = 2.0 * PI * j as f64 / n as f64;
-            writeln!(s, "v {} {} {}", r * theta.sin() * phi.cos(), r * theta.sin() * phi.sin(), r * theta.cos()).unwrap();
+            writeln!(
+                s,
+                "v {} {} {}",
+                r * theta.sin() * phi.cos(),
+                r * theta.sin() * phi.sin(),
+                r * theta.cos()
+            )
+            .unwrap();
         }
     }
     writeln!(s, "v 0 0 {}", -r).unwrap();
@@ -24,11 +31,25 @@ fn uv_sphere_obj(r: f64, n: usize) -> String {
     let south = 2 + (rings - 1) * n;
     for j in 0..n {
         writeln!(s, "f 1 {} {}", idx(1, j), idx(1, j + 1)).unwrap();
-        writeln!(s, "f {south} {} {}", idx(rings - 1, j + 1), idx(rings - 1, j)).unwrap();
+        writeln!(
+            s,
+            "f {south} {} {}",
+            idx(rings - 1, j + 1),
+            idx(rings - 1, j)
+        )
+        .unwrap();
     }
     for i in 1..rings - 1 {
         for j in 0..n {
-            writeln!(s, "f {} {} {} {}", idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)).unwrap();
+            writeln!(
+                s,
+                "f {} {} {} {}",
+                idx(i, j),
+                idx(i + 1, j),
+                idx(i + 1, j + 1),
+                idx(i, j + 1)
+            )
+            .unwrap();
         }
     }
     s
@@ -49,12 +70,28 @@ fn concentric_spheres_are_half_a_unit_apart() {
     println!("{out}");
     let get = |k: &str| out[k].as_f64().unwrap();
     // Same tessellation scaled: distances are 0.5 up to the chord error (r·(π/256)²/2 ≈ 8e-4).
-    assert!((get("hausdorff") - 0.5).abs() < 2e-3, "hausdorff {}", get("hausdorff"));
-    assert!((get("mean_distance") - 0.5).abs() < 2e-3, "mean {}", get("mean_distance"));
-    assert!((get("rms_distance") - 0.5).abs() < 2e-3, "rms {}", get("rms_distance"));
+    assert!(
+        (get("hausdorff") - 0.5).abs() < 2e-3,
+        "hausdorff {}",
+        get("hausdorff")
+    );
+    assert!(
+        (get("mean_distance") - 0.5).abs() < 2e-3,
+        "mean {}",
+        get("mean_distance")
+    );
+    assert!(
+        (get("rms_distance") - 0.5).abs() < 2e-3,
+        "rms {}",
+        get("rms_distance")
+    );
     assert!(get("mean_distance") <= get("rms_distance") && get("rms_distance") <= get("hausdorff"));
     let expected = 1.05f64.powi(3) - 1.0; // same tessellation, scaled by 1.05
-    assert!((get("volume_rel_diff") - expected).abs() < 1e-9, "volume_rel_diff {}", get("volume_rel_diff"));
+    assert!(
+        (get("volume_rel_diff") - expected).abs() < 1e-9,
+        "volume_rel_diff {}",
+        get("volume_rel_diff")
+    );
     assert!((get("volume_a") - 4.0 / 3.0 * PI * 1000.0).abs() / (4.0 / 3.0 * PI * 1000.0) < 1e-3);
 }
 
@@ -63,7 +100,12 @@ fn a_mesh_is_at_distance_zero_from_itself() {
     let a = data_dir().join("cortex_rh_pial_fsaverage5.stl");
     let a = a.to_str().unwrap();
     let out = vesselmsr_json(&["compare", "--json", "--samples", "20000", a, a]);
-    for k in ["hausdorff", "mean_distance", "rms_distance", "volume_rel_diff"] {
+    for k in [
+        "hausdorff",
+        "mean_distance",
+        "rms_distance",
+        "volume_rel_diff",
+    ] {
         assert!(out[k].as_f64().unwrap().abs() < 1e-9, "{k}: {}", out[k]);
     }
     assert_eq!(out["samples_per_surface"], 20000);
@@ -74,7 +116,10 @@ fn open_meshes_have_no_volume() {
     let a = data_dir().join("aorta_abdominal_open_ends.stl");
     let a = a.to_str().unwrap();
     let out = vesselmsr_json(&["compare", "--json", "--samples", "1000", a, a]);
-    assert!(out["volume_a"].is_null() && out["volume_rel_diff"].is_null(), "{out}");
+    assert!(
+        out["volume_a"].is_null() && out["volume_rel_diff"].is_null(),
+        "{out}"
+    );
     let text = vesselmsr(&["compare", "--samples", "1000", a, a]);
     assert!(String::from_utf8_lossy(&text.stdout).contains("not watertight"));
 }
@@ -92,9 +137,22 @@ fn hausdorff_brackets_libigl_on_a_capped_aorta() {
     vesselmsr_json(&["cap", "--json", o, "-o", c]);
     let ours = vesselmsr_json(&["compare", "--json", o, c]);
     let theirs = oracle.run(&[&"hausdorff", &open, &capped]);
-    let edge = vesselmsr_json(&["info", "--json", o])["mean_edge"].as_f64().unwrap();
-    let (h, h_igl) = (ours["hausdorff"].as_f64().unwrap(), theirs["hausdorff"].as_f64().unwrap());
-    println!("hausdorff open vs capped aorta: ours {h}, libigl (vertex bound) {h_igl}, mean edge {edge}");
-    assert!(h >= h_igl * (1.0 - 1e-9), "ours {h} below libigl's lower bound {h_igl}");
-    assert!(h <= h_igl + edge, "ours {h} exceeds libigl's bound {h_igl} by more than a mean edge");
+    let edge = vesselmsr_json(&["info", "--json", o])["mean_edge"]
+        .as_f64()
+        .unwrap();
+    let (h, h_igl) = (
+        ours["hausdorff"].as_f64().unwrap(),
+        theirs["hausdorff"].as_f64().unwrap(),
+    );
+    println!(
+        "hausdorff open vs capped aorta: ours {h}, libigl (vertex bound) {h_igl}, mean edge {edge}"
+    );
+    assert!(
+        h >= h_igl * (1.0 - 1e-9),
+        "ours {h} below libigl's lower bound {h_igl}"
+    );
+    assert!(
+        h <= h_igl + edge,
+        "ours {h} exceeds libigl's bound {h_igl} by more than a mean edge"
+    );
 }

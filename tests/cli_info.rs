@@ -25,17 +25,35 @@ fn info_matches_sources_and_pymeshlab() {
         let reference = oracle.check(&path);
         let area = info["area"].as_f64().unwrap();
         let ref_area = reference["pymeshlab_area"].as_f64().unwrap();
-        println!("{file}: area {area} vs pymeshlab {ref_area} (rel {:.2e})", rel(area, ref_area));
-        assert!(rel(area, ref_area) < 1e-6, "{file}: area {area} vs pymeshlab {ref_area}");
+        println!(
+            "{file}: area {area} vs pymeshlab {ref_area} (rel {:.2e})",
+            rel(area, ref_area)
+        );
+        assert!(
+            rel(area, ref_area) < 1e-6,
+            "{file}: area {area} vs pymeshlab {ref_area}"
+        );
         if closed {
             let vol = info["volume"].as_f64().unwrap();
             let ref_vol = reference["pymeshlab_volume"].as_f64().unwrap();
-            println!("{file}: volume {vol} vs pymeshlab {ref_vol} (rel {:.2e})", rel(vol, ref_vol));
-            assert!(rel(vol, ref_vol) < 1e-6, "{file}: volume {vol} vs pymeshlab {ref_vol}");
+            println!(
+                "{file}: volume {vol} vs pymeshlab {ref_vol} (rel {:.2e})",
+                rel(vol, ref_vol)
+            );
+            assert!(
+                rel(vol, ref_vol) < 1e-6,
+                "{file}: volume {vol} vs pymeshlab {ref_vol}"
+            );
             assert_eq!(info["genus"], reference["manifold_genus"], "{file} genus");
-            assert_eq!(reference["manifold_status"], "NoError", "{file}: manifold3d verdict");
+            assert_eq!(
+                reference["manifold_status"], "NoError",
+                "{file}: manifold3d verdict"
+            );
         } else {
-            assert!(info["volume"].is_null() && info["genus"].is_null(), "{file}: open mesh volume");
+            assert!(
+                info["volume"].is_null() && info["genus"].is_null(),
+                "{file}: open mesh volume"
+            );
             assert_eq!(info["orientation"], "open", "{file} orientation");
         }
     }
@@ -44,7 +62,10 @@ fn info_matches_sources_and_pymeshlab() {
 #[test]
 fn info_reports_orientation_of_closed_meshes() {
     let Some(dir) = real_dir() else { return };
-    for (file, expected) in [("aorta_abdominal_capped.stl", "inward"), ("cortex_rh_pial_fsaverage5.stl", "outward")] {
+    for (file, expected) in [
+        ("aorta_abdominal_capped.stl", "inward"),
+        ("cortex_rh_pial_fsaverage5.stl", "outward"),
+    ] {
         let info = vesselmsr_json(&["info", "--json", dir.join(file).to_str().unwrap()]);
         assert_eq!(info["orientation"], expected, "{file}");
     }
@@ -56,7 +77,14 @@ fn info_text_output_names_the_essentials() {
     let out = vesselmsr(&["info", path.to_str().unwrap()]);
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap().to_lowercase();
-    for word in ["6068", "11887", "boundary", "watertight", "orientation", "area"] {
+    for word in [
+        "6068",
+        "11887",
+        "boundary",
+        "watertight",
+        "orientation",
+        "area",
+    ] {
         assert!(text.contains(word), "text output lacks {word}:\n{text}");
     }
 }

@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use nalgebra::Point3;
 use rand::RngExt;
-use vesselmsr::bvh::{MeshBvh, WindingNumber};
+use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
 use vesselmsr::io::read_mesh;
 use vesselmsr::mesh::measures::{bounding_box, mean_edge_length};
 
@@ -19,7 +19,10 @@ fn test_points(mesh: &vesselmsr::TriMesh, n: usize, seed: u64) -> Vec<Point3<f64
     (0..n)
         .map(|i| {
             if i % 2 == 0 {
-                Point3::from(lo.coords - 0.1 * size + (1.2 * size).component_mul(&rng.random::<[f64; 3]>().into()))
+                Point3::from(
+                    lo.coords - 0.1 * size
+                        + (1.2 * size).component_mul(&rng.random::<[f64; 3]>().into()),
+                )
             } else {
                 let v = mesh.vertices[rng.random_range(0..mesh.num_vertices())];
                 let d: [f64; 3] = rng.random();
@@ -47,8 +50,14 @@ fn closest_distances_equal_libigl() {
             .zip(theirs.chunks_exact(4))
             .map(|(c, t)| (c.distance - t[0]).abs())
             .fold(0.0, f64::max);
-        println!("{file}: max |d_ours − d_libigl| = {:.3e} × bbox diagonal", worst / diag);
-        assert!(worst <= 1e-7 * diag, "{file}: closest distance differs from libigl by {worst}");
+        println!(
+            "{file}: max |d_ours − d_libigl| = {:.3e} × bbox diagonal",
+            worst / diag
+        );
+        assert!(
+            worst <= 1e-7 * diag,
+            "{file}: closest distance differs from libigl by {worst}"
+        );
     }
 }
 
@@ -68,7 +77,7 @@ fn winding_sign_matches_libigl_away_from_open_surfaces() {
             .into_iter()
             .filter(|p| bvh.closest_point(p).distance > edge)
             .collect();
-        let wn = WindingNumber::new(&mesh);
+        let wn = WindingNumber::new(&mesh, WindingOptions::default());
         let (theirs, _) = oracle.query("winding", &path, &points, 1);
         let mut mismatches = 0;
         let mut inside = 0;
@@ -82,7 +91,13 @@ fn winding_sign_matches_libigl_away_from_open_surfaces() {
             }
         }
         println!("{file}: {} points farther than one mean edge, {inside} inside, {mismatches} sign mismatches", points.len());
-        assert!(inside > 100 && inside < points.len() - 100, "{file}: test points must straddle the surface");
-        assert_eq!(mismatches, 0, "{file}: winding-number sign differs from libigl");
+        assert!(
+            inside > 100 && inside < points.len() - 100,
+            "{file}: test points must straddle the surface"
+        );
+        assert_eq!(
+            mismatches, 0,
+            "{file}: winding-number sign differs from libigl"
+        );
     }
 }

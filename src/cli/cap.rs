@@ -38,7 +38,10 @@ struct CapOutput<'a> {
 
 pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
     if let Some(l) = args.target_edge {
-        anyhow::ensure!(l.is_finite() && l > 0.0, "--target-edge must be a positive length, got {l}");
+        anyhow::ensure!(
+            l.is_finite() && l > 0.0,
+            "--target-edge must be a positive length, got {l}"
+        );
     }
     // Refuse an unwritable output format before any work is done.
     MeshFormat::from_path(&args.output)?;
@@ -46,10 +49,18 @@ pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
     let bar = progress::spinner(ctx.quiet, "capping boundary loops");
     let mut mesh = read_mesh(&args.mesh)?;
     let input = mesh_info(&mesh);
-    let inconsistent_faces_flipped = if orient { orient_consistently(&mut mesh) } else { 0 };
-    let opts = CapOptions { target_edge: args.target_edge, orient_outward: orient, ..Default::default() };
-    let (capped, report) =
-        cap_holes(&mesh, &opts).with_context(|| format!("{}: capping failed", args.mesh.display()))?;
+    let inconsistent_faces_flipped = if orient {
+        orient_consistently(&mut mesh)
+    } else {
+        0
+    };
+    let opts = CapOptions {
+        target_edge_length: args.target_edge,
+        orient_outward: orient,
+        ..Default::default()
+    };
+    let (capped, report) = cap_holes(&mesh, &opts)
+        .with_context(|| format!("{}: capping failed", args.mesh.display()))?;
     let output = mesh_info(&capped);
     write_mesh(&args.output, &capped)?;
     bar.finish_and_clear();
@@ -83,7 +94,11 @@ pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
         report.vertices_added,
         report.faces_added,
         report.max_cap_aspect_ratio,
-        if report.flipped { "; flipped to face outward" } else { "" }
+        if report.flipped {
+            "; flipped to face outward"
+        } else {
+            ""
+        }
     );
     println!("{}", args.output.display());
     println!("{output}");

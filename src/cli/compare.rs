@@ -34,27 +34,45 @@ pub fn run(ctx: &Context, args: &CompareArgs) -> anyhow::Result<()> {
     let a = read_mesh(&args.a)?;
     let b = read_mesh(&args.b)?;
     let (info_a, info_b) = (mesh_info(&a), mesh_info(&b));
-    let distance = surface_distance(&a, &b, &SurfaceDistanceOptions { samples: args.samples });
+    let distance = surface_distance(
+        &a,
+        &b,
+        &SurfaceDistanceOptions {
+            samples: args.samples,
+        },
+    );
     bar.finish_and_clear();
     let volume_rel_diff = match (info_a.volume, info_b.volume) {
         (Some(va), Some(vb)) if va > 0.0 => Some((vb - va) / va),
         _ => None,
     };
-    let out = CompareOutput { distance, volume_a: info_a.volume, volume_b: info_b.volume, volume_rel_diff };
+    let out = CompareOutput {
+        distance,
+        volume_a: info_a.volume,
+        volume_b: info_b.volume,
+        volume_rel_diff,
+    };
     if ctx.json {
         return print_json(&out);
     }
     let opt = |v: Option<f64>| v.map_or("n/a (not watertight)".to_string(), |v| format!("{v:.6}"));
     println!("A: {}\nB: {}", args.a.display(), args.b.display());
-    println!("hausdorff        {:.6}  (A→B {:.6}, B→A {:.6})", distance.hausdorff, distance.max_a_to_b, distance.max_b_to_a);
+    println!(
+        "hausdorff        {:.6}  (A→B {:.6}, B→A {:.6})",
+        distance.hausdorff, distance.max_a_to_b, distance.max_b_to_a
+    );
     println!("mean distance    {:.6}", distance.mean_distance);
     println!("rms distance     {:.6}", distance.rms_distance);
     println!("volume A         {}", opt(out.volume_a));
     println!("volume B         {}", opt(out.volume_b));
     println!(
         "volume rel diff  {}",
-        out.volume_rel_diff.map_or("n/a".to_string(), |r| format!("{:+.4}%", 100.0 * r))
+        out.volume_rel_diff
+            .map_or("n/a".to_string(), |r| format!("{:+.4}%", 100.0 * r))
     );
-    println!("(distances in the meshes' units, {} samples per surface)", args.samples);
+    println!(
+        "(distances in the meshes' units, {} samples per surface)",
+        args.samples
+    );
     Ok(())
 }

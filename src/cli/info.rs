@@ -1,9 +1,9 @@
 //! `vesselmsr info MESH`: validation and measures of one mesh.
 
 use super::{print_json, progress, Context};
-use std::path::Path;
 use crate::io::read_mesh;
 use crate::mesh::info::mesh_info;
+use std::path::Path;
 
 pub fn run(ctx: &Context, path: &Path) -> anyhow::Result<()> {
     let bar = progress::spinner(ctx.quiet, "reading and measuring");

@@ -69,9 +69,14 @@ pub fn run() -> i32 {
 fn execute(cli: Cli) -> anyhow::Result<()> {
     if let Some(n) = cli.threads {
         anyhow::ensure!(n >= 1, "--threads must be at least 1");
-        rayon::ThreadPoolBuilder::new().num_threads(n).build_global()?;
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()?;
     }
-    let ctx = Context { quiet: cli.quiet, json: cli.json };
+    let ctx = Context {
+        quiet: cli.quiet,
+        json: cli.json,
+    };
     match cli.command {
         Command::Info { mesh } => info::run(&ctx, &mesh),
         Command::Cap(args) => cap::run(&ctx, &args),

@@ -62,7 +62,9 @@ pub fn sample_surface(mesh: &TriMesh, n: usize) -> Vec<Point3<f64>> {
         .into_par_iter()
         .map(|k| {
             let target = (k as f64 + 0.5) / n as f64 * total;
-            let f = cumulative.partition_point(|&c| c < target).min(mesh.num_faces() - 1);
+            let f = cumulative
+                .partition_point(|&c| c < target)
+                .min(mesh.num_faces() - 1);
             let (mut u, mut v) = ((0.5 + a1 * k as f64).fract(), (0.5 + a2 * k as f64).fract());
             if u + v > 1.0 {
                 (u, v) = (1.0 - u, 1.0 - v);
@@ -74,18 +76,29 @@ pub fn sample_surface(mesh: &TriMesh, n: usize) -> Vec<Point3<f64>> {
 }
 
 /// Symmetric surface distances between `a` and `b` (see [`SurfaceDistance`]).
-pub fn surface_distance(a: &TriMesh, b: &TriMesh, opts: &SurfaceDistanceOptions) -> SurfaceDistance {
+pub fn surface_distance(
+    a: &TriMesh,
+    b: &TriMesh,
+    opts: &SurfaceDistanceOptions,
+) -> SurfaceDistance {
     let (bvh_a, bvh_b) = rayon::join(|| MeshBvh::new(a), || MeshBvh::new(b));
     let directed = |from: &TriMesh, to: &MeshBvh| -> (f64, f64, f64) {
         let samples = sample_surface(from, opts.samples);
-        let dists: Vec<f64> = samples.par_iter().map(|p| to.closest_point(p).distance).collect();
+        let dists: Vec<f64> = samples
+            .par_iter()
+            .map(|p| to.closest_point(p).distance)
+            .collect();
         let vertex_max = from
             .vertices
             .par_iter()
             .map(|p| to.closest_point(p).distance)
             .reduce(|| 0.0, f64::max);
         let max = dists.iter().copied().fold(vertex_max, f64::max);
-        (max, dists.iter().sum::<f64>(), dists.iter().map(|d| d * d).sum::<f64>())
+        (
+            max,
+            dists.iter().sum::<f64>(),
+            dists.iter().map(|d| d * d).sum::<f64>(),
+        )
     };
     let (ab, ba) = rayon::join(|| directed(a, &bvh_b), || directed(b, &bvh_a));
     let n = (2 * opts.samples).max(1) as f64;

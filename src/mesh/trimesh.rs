@@ -31,7 +31,11 @@ impl TriMesh {
     /// The three corners of triangle `f`.
     pub fn triangle(&self, f: usize) -> [Point3<f64>; 3] {
         let [a, b, c] = self.faces[f];
-        [self.vertices[a as usize], self.vertices[b as usize], self.vertices[c as usize]]
+        [
+            self.vertices[a as usize],
+            self.vertices[b as usize],
+            self.vertices[c as usize],
+        ]
     }
 
     /// The unnormalised normal (b − a) × (c − a) of triangle `f`: its length is twice the area.

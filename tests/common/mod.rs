@@ -71,7 +71,10 @@ pub fn oracle() -> Oracle {
         "the Python reference oracle is not installed ({}): run `bash tests/run_all.sh`, which creates it",
         python.display()
     );
-    Oracle { python, script: root.join("reference/oracle.py") }
+    Oracle {
+        python,
+        script: root.join("reference/oracle.py"),
+    }
 }
 
 impl Oracle {
@@ -85,7 +88,9 @@ impl Oracle {
         assert!(
             out.status.success(),
             "oracle {:?} failed: {}",
-            args.iter().map(|a| a.as_ref().to_string_lossy().into_owned()).collect::<Vec<_>>(),
+            args.iter()
+                .map(|a| a.as_ref().to_string_lossy().into_owned())
+                .collect::<Vec<_>>(),
             String::from_utf8_lossy(&out.stderr)
         );
         serde_json::from_slice(&out.stdout).expect("oracle prints JSON")
@@ -97,17 +102,32 @@ impl Oracle {
     }
 
     /// A per-point query (`closest`, `signed_distance`, `winding`) with `width` values per point.
-    pub fn query(&self, command: &str, mesh: &Path, points: &[Point3<f64>], width: usize) -> (Vec<f64>, Value) {
+    pub fn query(
+        &self,
+        command: &str,
+        mesh: &Path,
+        points: &[Point3<f64>],
+        width: usize,
+    ) -> (Vec<f64>, Value) {
         let dir = tempfile::tempdir().unwrap();
         let (input, output) = (dir.path().join("points.f64"), dir.path().join("out.f64"));
-        let bytes: Vec<u8> =
-            points.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(f64::to_le_bytes).collect();
+        let bytes: Vec<u8> = points
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .flat_map(f64::to_le_bytes)
+            .collect();
         std::fs::write(&input, bytes).unwrap();
         let answer = self.run(&[&command, &mesh, &input, &output]);
         let raw = std::fs::read(&output).unwrap();
-        let values: Vec<f64> =
-            raw.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap())).collect();
-        assert_eq!(values.len(), points.len() * width, "oracle {command} output length");
+        let values: Vec<f64> = raw
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert_eq!(
+            values.len(),
+            points.len() * width,
+            "oracle {command} output length"
+        );
         (values, answer)
     }
 }
