@@ -4,7 +4,7 @@
 
 mod common;
 use common::*;
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use rand::RngExt;
 use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
 use vesselmsr::io::read_mesh;
@@ -19,14 +19,12 @@ fn test_points(mesh: &vesselmsr::TriMesh, n: usize, seed: u64) -> Vec<Point3<f64
     (0..n)
         .map(|i| {
             if i % 2 == 0 {
-                Point3::from(
-                    lo.coords - 0.1 * size
-                        + (1.2 * size).component_mul(&rng.random::<[f64; 3]>().into()),
-                )
+                let u = Vector3::from(rng.random::<[f64; 3]>());
+                lo - 0.1 * size + (1.2 * size).component_mul(&u)
             } else {
                 let v = mesh.vertices[rng.random_range(0..mesh.num_vertices())];
                 let d: [f64; 3] = rng.random();
-                v + (nalgebra::Vector3::from(d) * 2.0 - nalgebra::Vector3::repeat(1.0)) * 3.0 * edge
+                v + (Vector3::from(d) * 2.0 - Vector3::repeat(1.0)) * 3.0 * edge
             }
         })
         .collect()
