@@ -156,3 +156,28 @@ fn hausdorff_brackets_libigl_on_a_capped_aorta() {
         "ours {h} exceeds libigl's bound {h_igl} by more than a mean edge"
     );
 }
+
+#[test]
+fn meshes_in_different_units_get_a_notice() {
+    let Some(dir) = real_dir() else { return };
+    let metres = dir.join("carotid_bifurcation.stl");
+    let mm = data_dir().join("aorta_abdominal_open_ends.stl");
+    let out = vesselmsr(&[
+        "compare",
+        "--samples",
+        "100",
+        metres.to_str().unwrap(),
+        mm.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("same units"), "no units notice: {stderr}");
+    let same = vesselmsr(&[
+        "compare",
+        "--samples",
+        "100",
+        mm.to_str().unwrap(),
+        mm.to_str().unwrap(),
+    ]);
+    assert!(!String::from_utf8_lossy(&same.stderr).contains("same units"));
+}

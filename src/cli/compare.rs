@@ -3,7 +3,7 @@
 use super::{print_json, progress, Context};
 use crate::io::read_mesh;
 use crate::mesh::distance::{surface_distance, SurfaceDistance, SurfaceDistanceOptions};
-use crate::mesh::info::mesh_info;
+use crate::mesh::info::{mesh_info, MeshInfo};
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
@@ -34,6 +34,11 @@ pub fn run(ctx: &Context, args: &CompareArgs) -> anyhow::Result<()> {
     let a = read_mesh(&args.a)?;
     let b = read_mesh(&args.b)?;
     let (info_a, info_b) = (mesh_info(&a), mesh_info(&b));
+    if !ctx.quiet {
+        if let Some(note) = units_notice(&info_a, &info_b) {
+            eprintln!("vesselmsr: notice: {note}");
+        }
+    }
     let distance = surface_distance(
         &a,
         &b,
@@ -75,4 +80,23 @@ pub fn run(ctx: &Context, args: &CompareArgs) -> anyhow::Result<()> {
         args.samples
     );
     Ok(())
+}
+
+/// A warning when the two meshes' sizes differ by a factor of 100 or more, which usually means
+/// different units (mm against m): coordinates are never rescaled.
+fn units_notice(a: &MeshInfo, b: &MeshInfo) -> Option<String> {
+    let diagonal = |i: &MeshInfo| {
+        (0..3)
+            .map(|k| (i.bbox_max[k] - i.bbox_min[k]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let ratio = diagonal(a) / diagonal(b);
+    (ratio.is_finite() && ratio > 0.0 && !(0.01..=100.0).contains(&ratio)).then(|| {
+        format!(
+            "the meshes' sizes differ by a factor of {:.0}: are they in the same units (mm, cm, m)? \
+             Coordinates are compared as they are.",
+            ratio.max(1.0 / ratio)
+        )
+    })
 }
