@@ -191,3 +191,26 @@ fn bad_flags_fail_with_status_2() {
         assert!(!out.exists(), "{args:?} wrote an output");
     }
 }
+
+#[test]
+fn cap_refuses_what_it_cannot_make_watertight() {
+    // Two closed tetrahedra touching at one vertex (a non-manifold vertex): there is no hole to
+    // cap, and the result is not a watertight manifold, so nothing is written.
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("bowtie.obj");
+    std::fs::write(
+        &path,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv -1 0 0\nv 0 -1 0\nv 0 0 -1\n\
+         f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n\
+         f 1 6 5\nf 1 5 7\nf 5 6 7\nf 6 1 7\n",
+    )
+    .unwrap();
+    let outdir = tempfile::tempdir().unwrap();
+    let out = outdir.path().join("out.ply");
+    assert_clean_failure(
+        &["cap", path.to_str().unwrap(), "-o", out.to_str().unwrap()],
+        &path,
+        "watertight",
+        Some(&out),
+    );
+}

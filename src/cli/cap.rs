@@ -62,6 +62,16 @@ pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
     let (capped, report) = cap_holes(&mesh, &opts)
         .with_context(|| format!("{}: capping failed", args.mesh.display()))?;
     let output = mesh_info(&capped);
+    // The promise of `cap` is a watertight mesh: refuse to write anything else. Defects that
+    // capping cannot mend (non-manifold edges or vertices of the input) end up here.
+    if !output.watertight {
+        anyhow::bail!(
+            "{}: capping could not make the mesh watertight: {} (input: {})",
+            args.mesh.display(),
+            output.leaks().join(", "),
+            input.leaks().join(", ")
+        );
+    }
     write_mesh(&args.output, &capped)?;
     bar.finish_and_clear();
     if !ctx.quiet {

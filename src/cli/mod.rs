@@ -60,7 +60,7 @@ pub fn run() -> i32 {
     match execute(cli) {
         Ok(()) => 0,
         Err(e) => {
-            eprintln!("vesselmsr: error: {e:#}");
+            eprintln!("vesselmsr: error: {}", one_line(&e));
             2
         }
     }
@@ -82,6 +82,22 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Cap(args) => cap::run(&ctx, &args),
         Command::Compare(args) => compare::run(&ctx, &args),
     }
+}
+
+/// The error and its causes on one line, leaving out a cause whose text the message already
+/// carries (the library's I/O errors print their OS error themselves).
+fn one_line(e: &anyhow::Error) -> String {
+    let mut message = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if !message.contains(&text) {
+            if !message.is_empty() {
+                message.push_str(": ");
+            }
+            message.push_str(&text);
+        }
+    }
+    message.replace('\n', " ")
 }
 
 /// Prints a value as pretty JSON on stdout.
