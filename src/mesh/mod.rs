@@ -8,6 +8,7 @@ pub mod distance;
 pub mod info;
 pub mod measures;
 pub mod orient;
+pub mod primitives;
 pub mod topology;
 mod trimesh;
 

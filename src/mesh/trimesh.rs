@@ -50,4 +50,12 @@ impl TriMesh {
             f.swap(1, 2);
         }
     }
+
+    /// Appends `other`'s vertices and triangles (its indices shifted past ours).
+    pub fn append(&mut self, other: &TriMesh) {
+        let offset = self.vertices.len() as u32;
+        self.vertices.extend_from_slice(&other.vertices);
+        self.faces
+            .extend(other.faces.iter().map(|f| f.map(|i| i + offset)));
+    }
 }
