@@ -45,11 +45,8 @@ fn box_torus_and_tube() {
     assert!(info.watertight && info.orientation == Orientation::Outward);
     assert_eq!(info.genus, Some(1));
     let exact = 2.0 * PI * PI * 3.0; // 2π²Rr²
-    assert!(
-        (info.volume.unwrap() - exact).abs() / exact < 2e-3,
-        "torus volume {}",
-        info.volume.unwrap()
-    );
+    let err = (exact - info.volume.unwrap()) / exact; // inscribed polygons: slightly below
+    assert!(err > 0.0 && err < 5e-3, "torus volume error {err}");
 
     let tube = open_tube(1.5, 10.0, 32, 11);
     assert_eq!(tube.num_vertices(), 32 * 11);
