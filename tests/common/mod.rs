@@ -63,6 +63,14 @@ pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
 }
 
+/// Asserts that `ours` equals pymeshlab's `theirs` within 1e-6 relative, printing both as
+/// "{what} ours vs pymeshlab theirs (rel …)".
+pub fn assert_matches_pymeshlab(what: &str, ours: f64, theirs: f64) {
+    let r = rel(ours, theirs);
+    println!("{what} {ours} vs pymeshlab {theirs} (rel {r:.2e})");
+    assert!(r < 1e-6, "{what} {ours} vs pymeshlab {theirs}");
+}
+
 /// The project's shipped sample folder.
 pub fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("data")
@@ -85,6 +93,11 @@ pub fn vesselmsr_json(args: &[&str]) -> Value {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).expect("stdout is JSON")
+}
+
+/// `vesselmsr info --json <path>`, parsed.
+pub fn info_json(path: &Path) -> Value {
+    vesselmsr_json(&["info", "--json", path.to_str().unwrap()])
 }
 
 /// The Python reference oracle.
