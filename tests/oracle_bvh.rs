@@ -11,7 +11,9 @@ use vesselmsr::io::read_mesh;
 use vesselmsr::mesh::measures::{bounding_box, mean_edge_length};
 
 /// Half uniform in the bounding box grown by 20%, half near the surface (a vertex plus a random
-/// offset of up to three mean edges).
+/// offset of up to three mean edges per axis). Not `common::sample_points`: that one offsets by
+/// at most two mean edges in a random direction and puts about half as many points between one
+/// and three mean edges from the surface, the band the winding-sign test below keeps.
 fn test_points(mesh: &vesselmsr::TriMesh, n: usize, seed: u64) -> Vec<Point3<f64>> {
     let mut rng = rng(seed);
     let (lo, hi) = bounding_box(mesh);
