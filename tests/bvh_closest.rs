@@ -9,7 +9,6 @@ use rand::RngExt;
 use rayon::prelude::*;
 use vesselmsr::bvh::brute::closest_point_brute;
 use vesselmsr::bvh::{closest_point_on_triangle, MeshBvh};
-use vesselmsr::mesh::measures::bounding_box;
 use vesselmsr::mesh::primitives::icosphere;
 use vesselmsr::TriMesh;
 
@@ -176,8 +175,7 @@ fn compare_with_brute(mesh: &TriMesh, bvh: &MeshBvh, pts: &[Point3<f64>]) -> f64
 fn real_meshes_bvh_equals_brute_force() {
     let Some(meshes) = real_meshes() else { return };
     for (name, mesh) in &meshes {
-        let (lo, hi) = bounding_box(mesh);
-        let diag = (hi - lo).norm();
+        let diag = bbox_diagonal(mesh);
         let bvh = MeshBvh::new(mesh);
         assert_eq!(bvh.num_triangles(), mesh.num_faces());
         let pts = sample_points(mesh, 10_000, 42);

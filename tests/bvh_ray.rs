@@ -10,7 +10,6 @@ use rand::RngExt;
 use rayon::prelude::*;
 use vesselmsr::bvh::brute::{cast_ray_brute, count_ray_hits_brute, intersect_ray_triangle_mt};
 use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
-use vesselmsr::mesh::measures::bounding_box;
 use vesselmsr::mesh::primitives::icosphere;
 use vesselmsr::TriMesh;
 
@@ -120,8 +119,7 @@ fn icosphere_edges_and_vertices_are_watertight() {
 /// nearly so; a third of the rays are bounded, and some directions are far from unit length.
 fn sample_rays(mesh: &TriMesh, n: usize, seed: u64) -> Vec<(Point3<f64>, Vector3<f64>, f64)> {
     let origins = sample_points(mesh, n, seed);
-    let (lo, hi) = bounding_box(mesh);
-    let diag = (hi - lo).norm();
+    let diag = bbox_diagonal(mesh);
     let mut rng = rng(seed + 1);
     origins
         .into_iter()
@@ -159,8 +157,7 @@ fn compare_rays(
     bvh: &MeshBvh,
     rays: &[(Point3<f64>, Vector3<f64>, f64)],
 ) -> RayStats {
-    let (lo, hi) = bounding_box(mesh);
-    let diag = (hi - lo).norm();
+    let diag = bbox_diagonal(mesh);
     let per_ray: Vec<(f64, bool, bool)> = rays
         .par_iter()
         .map(|(o, d, t_max)| {
@@ -228,8 +225,7 @@ fn real_closed_meshes_hit_parity_matches_winding_number() {
         if name != "cortex_rh_pial_fsaverage5.stl" && name != "aorta_abdominal_capped.stl" {
             continue;
         }
-        let (lo, hi) = bounding_box(mesh);
-        let diag = (hi - lo).norm();
+        let diag = bbox_diagonal(mesh);
         let wn = WindingNumber::new(mesh, WindingOptions::default());
         let origins = sample_points(mesh, 4000, 99);
         let mut rng = rng(100);

@@ -39,8 +39,7 @@ fn closest_distances_equal_libigl() {
     for (file, ..) in REAL_MESHES {
         let path = dir.join(file);
         let mesh = read_mesh(&path).unwrap();
-        let (lo, hi) = bounding_box(&mesh);
-        let diag = (hi - lo).norm();
+        let diag = bbox_diagonal(&mesh);
         let points = test_points(&mesh, 10_000, 7);
         let bvh = MeshBvh::new(&mesh);
         let ours = bvh.closest_points(&points);

@@ -7,6 +7,12 @@ use rand::RngExt;
 use vesselmsr::mesh::measures::{bounding_box, mean_edge_length};
 use vesselmsr::TriMesh;
 
+/// Length of the bounding-box diagonal: the scale that tolerances on real meshes are relative to.
+pub fn bbox_diagonal(mesh: &TriMesh) -> f64 {
+    let (lo, hi) = bounding_box(mesh);
+    (hi - lo).norm()
+}
+
 /// A uniformly distributed unit vector (rejection sampling in the unit ball).
 pub fn unit_vector(rng: &mut StdRng) -> Vector3<f64> {
     loop {
