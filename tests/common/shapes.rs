@@ -13,7 +13,7 @@ pub fn cube(lo: f64, hi: f64) -> TriMesh {
 /// The cube [lo, hi]³ without the two triangles of one side, numbered −x, +x, −y, +y, −z, +z
 /// (side 5 is the top, z = hi): an open box with one square boundary loop.
 pub fn cube_without_side(lo: f64, hi: f64, side: usize) -> TriMesh {
-    let (axis, at) = (side / 2, if side % 2 == 0 { lo } else { hi });
+    let (axis, at) = (side / 2, [lo, hi][side % 2]);
     let mut mesh = cube(lo, hi);
     let before = mesh.num_faces();
     let vertices = &mesh.vertices;
