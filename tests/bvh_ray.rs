@@ -3,197 +3,15 @@
 //! real meshes and a small mesh far from the origin, and the parity of the hit count against the
 //! winding number on the closed meshes.
 
+mod common;
+use common::*;
 use nalgebra::{Point3, Vector3};
-use rand::prelude::*;
+use rand::RngExt;
 use rayon::prelude::*;
-use std::path::{Path, PathBuf};
 use vesselmsr::bvh::brute::{cast_ray_brute, count_ray_hits_brute, intersect_ray_triangle_mt};
 use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
+use vesselmsr::mesh::primitives::icosphere;
 use vesselmsr::TriMesh;
-
-const REAL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real");
-const FILES: [&str; 6] = [
-    "aorta_abdominal_open_ends.stl",
-    "aorta_abdominal_capped.stl",
-    "carotid_bifurcation.stl",
-    "ica_aneurysm_c0015.stl",
-    "coronary_stenosis_xray.stl",
-    "cortex_rh_pial_fsaverage5.stl",
-];
-
-fn real_meshes() -> Option<Vec<(String, TriMesh)>> {
-    if !Path::new(REAL).is_dir() {
-        println!("skipping: ../shared/data/real not found");
-        return None;
-    }
-    Some(
-        FILES
-            .iter()
-            .map(|f| {
-                let path = PathBuf::from(REAL).join(f);
-                let mesh = vesselmsr::io::read_mesh(&path).expect("read real mesh");
-                (f.to_string(), mesh)
-            })
-            .collect(),
-    )
-}
-
-fn bbox(mesh: &TriMesh) -> (Point3<f64>, Point3<f64>) {
-    let mut lo = mesh.vertices[0];
-    let mut hi = lo;
-    for v in &mesh.vertices {
-        lo = lo.inf(v);
-        hi = hi.sup(v);
-    }
-    (lo, hi)
-}
-
-fn mean_edge(mesh: &TriMesh) -> f64 {
-    let mut s = 0.0;
-    for f in 0..mesh.num_faces() {
-        let [a, b, c] = mesh.triangle(f);
-        s += (b - a).norm() + (c - b).norm() + (a - c).norm();
-    }
-    s / (3.0 * mesh.num_faces() as f64)
-}
-
-fn unit_vector(rng: &mut StdRng) -> Vector3<f64> {
-    loop {
-        let v = Vector3::new(
-            rng.random::<f64>() * 2.0 - 1.0,
-            rng.random::<f64>() * 2.0 - 1.0,
-            rng.random::<f64>() * 2.0 - 1.0,
-        );
-        let n = v.norm();
-        if n > 1e-3 && n <= 1.0 {
-            return v / n;
-        }
-    }
-}
-
-/// `n` query points: half uniform in the bounding box enlarged by 20 %, half a random surface
-/// point (area-weighted) plus a random offset of up to two mean edges.
-fn sample_points(mesh: &TriMesh, n: usize, seed: u64) -> Vec<Point3<f64>> {
-    let mut rng = StdRng::seed_from_u64(seed);
-    let (lo, hi) = bbox(mesh);
-    let c = nalgebra::center(&lo, &hi);
-    let half = (hi - lo) * 0.6;
-    let h = mean_edge(mesh);
-    let mut cum = Vec::with_capacity(mesh.num_faces());
-    let mut total = 0.0;
-    for f in 0..mesh.num_faces() {
-        total += 0.5 * mesh.face_normal_raw(f).norm();
-        cum.push(total);
-    }
-    let mut pts = Vec::with_capacity(n);
-    for i in 0..n {
-        if i % 2 == 0 {
-            let u = Vector3::from_fn(|_, _| rng.random::<f64>() * 2.0 - 1.0);
-            pts.push(c + half.component_mul(&u));
-        } else {
-            let x = rng.random::<f64>() * total;
-            let f = cum.partition_point(|&s| s < x).min(mesh.num_faces() - 1);
-            let [a, b, cc] = mesh.triangle(f);
-            let (mut r1, mut r2) = (rng.random::<f64>(), rng.random::<f64>());
-            if r1 + r2 > 1.0 {
-                r1 = 1.0 - r1;
-                r2 = 1.0 - r2;
-            }
-            let s = a + (b - a) * r1 + (cc - a) * r2;
-            pts.push(s + unit_vector(&mut rng) * (rng.random::<f64>() * 2.0 * h));
-        }
-    }
-    pts
-}
-
-/// Icosphere: icosahedron subdivided `levels` times, projected to the sphere; outward faces.
-fn icosphere(levels: usize, radius: f64, center: Point3<f64>) -> TriMesh {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut v: Vec<Vector3<f64>> = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .iter()
-    .map(|p| Vector3::from(*p).normalize())
-    .collect();
-    let mut f: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid = std::collections::HashMap::new();
-        let mut nf = Vec::with_capacity(f.len() * 4);
-        let mut midpoint = |a: u32, b: u32, v: &mut Vec<Vector3<f64>>| -> u32 {
-            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                v.push(((v[a as usize] + v[b as usize]) * 0.5).normalize());
-                (v.len() - 1) as u32
-            })
-        };
-        for [a, b, c] in f {
-            let ab = midpoint(a, b, &mut v);
-            let bc = midpoint(b, c, &mut v);
-            let ca = midpoint(c, a, &mut v);
-            nf.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = nf;
-    }
-    let verts = v.iter().map(|d| center + d * radius).collect();
-    TriMesh::new(verts, f)
-}
-
-/// Axis-aligned cube [lo, hi]³ with outward faces, two triangles per face.
-fn cube(lo: f64, hi: f64) -> TriMesh {
-    let v = (0..8)
-        .map(|i| {
-            Point3::new(
-                if i & 1 == 0 { lo } else { hi },
-                if i & 2 == 0 { lo } else { hi },
-                if i & 4 == 0 { lo } else { hi },
-            )
-        })
-        .collect();
-    let quads = [
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-    ];
-    let f = quads
-        .iter()
-        .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
-        .collect();
-    TriMesh::new(v, f)
-}
 
 #[test]
 fn cube_analytic_hits() {
@@ -279,7 +97,7 @@ fn icosphere_edges_and_vertices_are_watertight() {
             targets.push(nalgebra::center(&a, &b));
         }
     }
-    let mut rng = StdRng::seed_from_u64(17);
+    let mut rng = rng(17);
     for t in &targets {
         // From outside, through the vertex or edge point, within ~30° of the inward radial
         // direction (so the ray enters the polyhedron there rather than grazing it).
@@ -301,9 +119,8 @@ fn icosphere_edges_and_vertices_are_watertight() {
 /// nearly so; a third of the rays are bounded, and some directions are far from unit length.
 fn sample_rays(mesh: &TriMesh, n: usize, seed: u64) -> Vec<(Point3<f64>, Vector3<f64>, f64)> {
     let origins = sample_points(mesh, n, seed);
-    let (lo, hi) = bbox(mesh);
-    let diag = (hi - lo).norm();
-    let mut rng = StdRng::seed_from_u64(seed + 1);
+    let diag = bbox_diagonal(mesh);
+    let mut rng = rng(seed + 1);
     origins
         .into_iter()
         .enumerate()
@@ -340,8 +157,7 @@ fn compare_rays(
     bvh: &MeshBvh,
     rays: &[(Point3<f64>, Vector3<f64>, f64)],
 ) -> RayStats {
-    let (lo, hi) = bbox(mesh);
-    let diag = (hi - lo).norm();
+    let diag = bbox_diagonal(mesh);
     let per_ray: Vec<(f64, bool, bool)> = rays
         .par_iter()
         .map(|(o, d, t_max)| {
@@ -409,11 +225,10 @@ fn real_closed_meshes_hit_parity_matches_winding_number() {
         if name != "cortex_rh_pial_fsaverage5.stl" && name != "aorta_abdominal_capped.stl" {
             continue;
         }
-        let (lo, hi) = bbox(mesh);
-        let diag = (hi - lo).norm();
+        let diag = bbox_diagonal(mesh);
         let wn = WindingNumber::new(mesh, WindingOptions::default());
         let origins = sample_points(mesh, 4000, 99);
-        let mut rng = StdRng::seed_from_u64(100);
+        let mut rng = rng(100);
         let dirs: Vec<Vector3<f64>> = origins.iter().map(|_| unit_vector(&mut rng)).collect();
         let (mut checked, mut odd) = (0, 0);
         for (o, d) in origins.iter().zip(&dirs) {

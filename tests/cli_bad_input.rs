@@ -5,21 +5,6 @@ mod common;
 use common::*;
 use std::path::{Path, PathBuf};
 
-fn binary_stl(triangles: &[[[f32; 3]; 3]], claimed: u32) -> Vec<u8> {
-    let mut bytes = vec![0u8; 80];
-    bytes.extend_from_slice(&claimed.to_le_bytes());
-    for t in triangles {
-        bytes.extend_from_slice(&[0u8; 12]);
-        for v in t {
-            for c in v {
-                bytes.extend_from_slice(&c.to_le_bytes());
-            }
-        }
-        bytes.extend_from_slice(&[0u8; 2]);
-    }
-    bytes
-}
-
 const TRI: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 
 /// (name, contents, a word the message must contain)
@@ -31,7 +16,7 @@ fn bad_files() -> Vec<(&'static str, Vec<u8>, &'static str)> {
         ("unknown.xyz", b"1 2 3\n".to_vec(), "format"),
         (
             "claims_more.stl",
-            binary_stl(&[TRI], 1_000_000_000),
+            binary_stl(&[0; 80], 1_000_000_000, &[TRI]),
             "1000000000",
         ),
         (
@@ -42,8 +27,9 @@ fn bad_files() -> Vec<(&'static str, Vec<u8>, &'static str)> {
         (
             "nan.stl",
             binary_stl(
-                &[[[f32::NAN, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]],
+                &[0; 80],
                 1,
+                &[[[f32::NAN, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]],
             ),
             "",
         ),
@@ -62,10 +48,10 @@ fn bad_files() -> Vec<(&'static str, Vec<u8>, &'static str)> {
             b"v 0 0 0\nv 1 0 0\nv 0 1 0\n".to_vec(),
             "triangle",
         ),
-        ("no_triangles.stl", binary_stl(&[], 0), "triangle"),
+        ("no_triangles.stl", binary_stl(&[0; 80], 0, &[]), "triangle"),
         (
             "degenerate.stl",
-            binary_stl(&[[[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]], 1),
+            binary_stl(&[0; 80], 1, &[[[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]]),
             "degenerate",
         ),
     ]
@@ -110,8 +96,7 @@ fn bad_inputs_fail_cleanly_in_info_cap_and_compare() {
     let tmp = tempfile::tempdir().unwrap();
     let good = data_dir().join("aorta_abdominal_open_ends.stl");
     for (name, contents, word) in bad_files() {
-        let path = tmp.path().join(name);
-        std::fs::write(&path, contents).unwrap();
+        let path = write_file(tmp.path(), name, &contents);
         let p = path.to_str().unwrap();
         assert_clean_failure(&["info", p], &path, word, None);
         assert_clean_failure(&["info", "--json", p], &path, word, None);
@@ -197,14 +182,13 @@ fn cap_refuses_what_it_cannot_make_watertight() {
     // Two closed tetrahedra touching at one vertex (a non-manifold vertex): there is no hole to
     // cap, and the result is not a watertight manifold, so nothing is written.
     let tmp = tempfile::tempdir().unwrap();
-    let path = tmp.path().join("bowtie.obj");
-    std::fs::write(
-        &path,
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv -1 0 0\nv 0 -1 0\nv 0 0 -1\n\
+    let path = write_file(
+        tmp.path(),
+        "bowtie.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv -1 0 0\nv 0 -1 0\nv 0 0 -1\n\
          f 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n\
          f 1 6 5\nf 1 5 7\nf 5 6 7\nf 6 1 7\n",
-    )
-    .unwrap();
+    );
     let outdir = tempfile::tempdir().unwrap();
     let out = outdir.path().join("out.ply");
     assert_clean_failure(

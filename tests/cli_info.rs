@@ -4,17 +4,13 @@
 mod common;
 use common::*;
 
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
-}
-
 #[test]
 fn info_matches_sources_and_pymeshlab() {
     let Some(dir) = real_dir() else { return };
     let oracle = oracle();
     for (file, v, f, loops, closed) in REAL_MESHES {
         let path = dir.join(file);
-        let info = vesselmsr_json(&["info", "--json", path.to_str().unwrap()]);
+        let info = info_json(&path);
         println!("{file}: {info}");
         assert_eq!(info["vertices"], v, "{file} vertices");
         assert_eq!(info["faces"], f, "{file} faces");
@@ -23,26 +19,16 @@ fn info_matches_sources_and_pymeshlab() {
         assert_eq!(info["components"], 1, "{file} components");
         assert_eq!(info["non_manifold_edges"], 0, "{file} non-manifold edges");
         let reference = oracle.check(&path);
-        let area = info["area"].as_f64().unwrap();
-        let ref_area = reference["pymeshlab_area"].as_f64().unwrap();
-        println!(
-            "{file}: area {area} vs pymeshlab {ref_area} (rel {:.2e})",
-            rel(area, ref_area)
-        );
-        assert!(
-            rel(area, ref_area) < 1e-6,
-            "{file}: area {area} vs pymeshlab {ref_area}"
+        assert_matches_pymeshlab(
+            &format!("{file}: area"),
+            info["area"].as_f64().unwrap(),
+            reference["pymeshlab_area"].as_f64().unwrap(),
         );
         if closed {
-            let vol = info["volume"].as_f64().unwrap();
-            let ref_vol = reference["pymeshlab_volume"].as_f64().unwrap();
-            println!(
-                "{file}: volume {vol} vs pymeshlab {ref_vol} (rel {:.2e})",
-                rel(vol, ref_vol)
-            );
-            assert!(
-                rel(vol, ref_vol) < 1e-6,
-                "{file}: volume {vol} vs pymeshlab {ref_vol}"
+            assert_matches_pymeshlab(
+                &format!("{file}: volume"),
+                info["volume"].as_f64().unwrap(),
+                reference["pymeshlab_volume"].as_f64().unwrap(),
             );
             assert_eq!(info["genus"], reference["manifold_genus"], "{file} genus");
             assert_eq!(
@@ -66,7 +52,7 @@ fn info_reports_orientation_of_closed_meshes() {
         ("aorta_abdominal_capped.stl", "inward"),
         ("cortex_rh_pial_fsaverage5.stl", "outward"),
     ] {
-        let info = vesselmsr_json(&["info", "--json", dir.join(file).to_str().unwrap()]);
+        let info = info_json(&dir.join(file));
         assert_eq!(info["orientation"], expected, "{file}");
     }
 }

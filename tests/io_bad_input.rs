@@ -1,17 +1,13 @@
 //! Bad input to the mesh readers and writers: each case must give the right error kind with the
 //! file path and a word about the problem, never a panic, a huge allocation or a partial file.
 
-use rand::{rngs::StdRng, RngExt, SeedableRng};
-use std::path::{Path, PathBuf};
+mod common;
+use common::*;
+use rand::{rngs::StdRng, RngExt};
+use std::path::Path;
 use std::time::{Duration, Instant};
 use vesselmsr::io::{read_mesh, write_atomic, write_mesh, write_mesh_with_scalars};
 use vesselmsr::{Error, TriMesh};
-
-fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, bytes).unwrap();
-    path
-}
 
 /// Asserts a `Format` error whose message names the path and contains every word.
 fn assert_format_error(
@@ -30,7 +26,7 @@ fn assert_format_error(
 }
 
 fn read_error(dir: &Path, name: &str, bytes: &[u8], words: &[&str]) {
-    let path = write(dir, name, bytes);
+    let path = write_file(dir, name, bytes);
     assert_format_error(read_mesh(&path), &path, words);
 }
 
@@ -44,17 +40,9 @@ fn listing(dir: &Path) -> Vec<String> {
     names
 }
 
-fn binary_stl(n_declared: u32, triangles: &[[[f32; 3]; 3]]) -> Vec<u8> {
-    let mut bytes = vec![0u8; 80];
-    bytes.extend_from_slice(&n_declared.to_le_bytes());
-    for t in triangles {
-        bytes.extend_from_slice(&[0u8; 12]);
-        t.iter()
-            .flatten()
-            .for_each(|c| bytes.extend_from_slice(&c.to_le_bytes()));
-        bytes.extend_from_slice(&[0u8; 2]);
-    }
-    bytes
+/// Binary STL with a zeroed header declaring `n_declared` triangles.
+fn zero_header_stl(n_declared: u32, triangles: &[[[f32; 3]; 3]]) -> Vec<u8> {
+    binary_stl(&[0; 80], n_declared, triangles)
 }
 
 fn tetra_triangles() -> Vec<[[f32; 3]; 3]> {
@@ -107,7 +95,7 @@ fn missing_file_is_an_io_error() {
 #[test]
 fn unknown_extension_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "mesh.vtk", b"# vtk DataFile Version 3.0\n");
+    let path = write_file(dir.path(), "mesh.vtk", b"# vtk DataFile Version 3.0\n");
     let err = read_mesh(&path).unwrap_err();
     assert!(matches!(err, Error::UnknownFormat { .. }), "{err:?}");
     let text = err.to_string();
@@ -135,7 +123,7 @@ fn binary_stl_claiming_four_billion_triangles_fails_fast() {
     read_error(
         dir.path(),
         "liar.stl",
-        &binary_stl(u32::MAX, &tetra_triangles().repeat(3)),
+        &zero_header_stl(u32::MAX, &tetra_triangles().repeat(3)),
         &["declares 4294967295 triangles", "holds only 12"],
     );
     // 4·10⁹ triangles would need hundreds of gigabytes: the size check comes first.
@@ -149,7 +137,7 @@ fn binary_stl_claiming_four_billion_triangles_fails_fast() {
 #[test]
 fn truncated_binary_stl_whose_header_starts_with_solid() {
     let dir = tempfile::tempdir().unwrap();
-    let mut bytes = binary_stl(4, &tetra_triangles());
+    let mut bytes = zero_header_stl(4, &tetra_triangles());
     bytes[..11].copy_from_slice(b"solid part ");
     bytes.truncate(84 + 50 * 3 + 20);
     read_error(
@@ -208,7 +196,7 @@ fn non_finite_coordinates_in_stl() {
     read_error(
         dir.path(),
         "nan.stl",
-        &binary_stl(4, &t),
+        &zero_header_stl(4, &t),
         &["vertex 3", "non-finite", "NaN"],
     );
     let mut t = tetra_triangles();
@@ -216,7 +204,7 @@ fn non_finite_coordinates_in_stl() {
     read_error(
         dir.path(),
         "inf.stl",
-        &binary_stl(4, &t),
+        &zero_header_stl(4, &t),
         &["vertex 0", "non-finite", "-inf"],
     );
     let text = ascii_stl().replacen("vertex 0 1 0", "vertex 0 inf 0", 1);
@@ -299,7 +287,7 @@ fn obj_face_index_zero_or_negative_beyond_range() {
     );
     let text = format!("{OBJ_TETRA}f 1/-9 2/-9 3/-9\n");
     // Texture indices are ignored, so this is a valid extra triangle (tobj panicked here).
-    let path = write(dir.path(), "vt.obj", text.as_bytes());
+    let path = write_file(dir.path(), "vt.obj", text.as_bytes());
     assert_eq!(read_mesh(&path).unwrap().num_faces(), 5);
     let text = format!("{OBJ_TETRA}f 1 2\n");
     read_error(
@@ -422,7 +410,7 @@ fn zero_triangles() {
     read_error(
         dir.path(),
         "none.stl",
-        &binary_stl(0, &[]),
+        &zero_header_stl(0, &[]),
         &["no triangles"],
     );
     read_error(
@@ -462,11 +450,11 @@ fn only_degenerate_triangles() {
     read_error(
         dir.path(),
         "point.stl",
-        &binary_stl(2, &[[p, p, p], [p, [1.0; 3], p]]),
+        &zero_header_stl(2, &[[p, p, p], [p, [1.0; 3], p]]),
         &["all 2", "degenerate"],
     );
     // One good triangle among degenerate ones is enough.
-    let path = write(
+    let path = write_file(
         dir.path(),
         "ok.obj",
         format!("{text}v 0 1 0\nf 1 2 5\n").as_bytes(),
@@ -476,7 +464,7 @@ fn only_degenerate_triangles() {
 
 fn tetra_mesh() -> TriMesh {
     let path_dir = tempfile::tempdir().unwrap();
-    let path = write(path_dir.path(), "t.obj", OBJ_TETRA.as_bytes());
+    let path = write_file(path_dir.path(), "t.obj", OBJ_TETRA.as_bytes());
     read_mesh(&path).unwrap()
 }
 
@@ -506,7 +494,7 @@ fn a_write_that_fails_midway_leaves_nothing() {
 #[test]
 fn an_existing_file_is_replaced_only_on_success() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "out.obj", b"old contents");
+    let path = write_file(dir.path(), "out.obj", b"old contents");
     let failed = write_atomic(&path, |w| {
         w.write_all(b"new contents, half").unwrap();
         Err(Error::Geometry("no".into()))
@@ -529,7 +517,7 @@ fn an_existing_file_is_replaced_only_on_success() {
     {
         use std::os::unix::fs::PermissionsExt;
         // The same permissions as any new file (the temporary file alone would be 0600).
-        let plain = write(dir.path(), "plain", b"");
+        let plain = write_file(dir.path(), "plain", b"");
         let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode();
         assert_eq!(mode(&path), mode(&plain), "{:o}", mode(&path));
     }
@@ -613,9 +601,9 @@ fn survives_damage(dir: &Path, name: &str, bytes: &[u8], rng: &mut StdRng) -> (u
 #[test]
 fn damaged_files_never_panic() {
     let dir = tempfile::tempdir().unwrap();
-    let mut rng = StdRng::seed_from_u64(20240611);
+    let mut rng = rng(20240611);
     let cases: Vec<(&str, Vec<u8>)> = vec![
-        ("binary.stl", binary_stl(4, &tetra_triangles())),
+        ("binary.stl", zero_header_stl(4, &tetra_triangles())),
         ("ascii.stl", ascii_stl().into_bytes()),
         ("tetra.obj", OBJ_TETRA.as_bytes().to_vec()),
         ("ascii.ply", ply_ascii_tetra(4).into_bytes()),

@@ -2,33 +2,13 @@
 //! STL, binary STL with a "solid" header, OBJ polygons and objects, PLY in all three encodings with
 //! extra properties and elements), scalar fields, and the real meshes of ../shared/data/real.
 
+mod common;
+use common::*;
 use nalgebra::Point3;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 use vesselmsr::io::{read_mesh, read_ply_scalars, write_mesh, write_mesh_with_scalars, MeshFormat};
 use vesselmsr::TriMesh;
-
-/// Unit-cube corners and its 12 outward triangles.
-fn cube() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-    let v = (0..8)
-        .map(|i| [(i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64])
-        .collect();
-    let f = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    (v, f)
-}
 
 /// An octahedron with coordinates that f32 cannot hold exactly (so OBJ/PLY exactness is tested),
 /// listed in an order unrelated to first use by the faces.
@@ -55,33 +35,9 @@ fn odd_octahedron() -> TriMesh {
     TriMesh::new(vertices, faces)
 }
 
-fn binary_stl(header: &[u8], triangles: &[[[f32; 3]; 3]]) -> Vec<u8> {
-    let mut bytes = vec![b' '; 80];
-    bytes[..header.len()].copy_from_slice(header);
-    bytes.extend_from_slice(&(triangles.len() as u32).to_le_bytes());
-    for t in triangles {
-        bytes.extend_from_slice(&[0u8; 12]);
-        for p in t {
-            for c in p {
-                bytes.extend_from_slice(&c.to_le_bytes());
-            }
-        }
-        bytes.extend_from_slice(&[0u8; 2]);
-    }
-    bytes
-}
-
+/// The unit cube as binary STL triangles.
 fn cube_triangles() -> Vec<[[f32; 3]; 3]> {
-    let (v, f) = cube();
-    f.iter()
-        .map(|t| t.map(|i| v[i as usize].map(|c| c as f32)))
-        .collect()
-}
-
-fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, bytes).unwrap();
-    path
+    stl_triangles(&cube(0.0, 1.0))
 }
 
 /// Every triangle of `b` has the same corners as the same triangle of `a`, within `tol`.
@@ -150,7 +106,7 @@ fn ascii_stl_is_read_and_welded() {
         FACET NORMAL -1 0 0 OUTER LOOP VERTEX 0e0 0 0 VERTEX 0 0 1 VERTEX 0 1 0 ENDLOOP ENDFACET\n\
         \tfacet normal 0.577 0.577 0.577\r\n\touter loop\r\n\tvertex 1 0 0\r\n\tvertex 0 1 0\r\n\tvertex 0 0 1.5e-1\r\n\tendloop\r\n\tendfacet\r\n\
         endsolid tetra made by hand\n";
-    let path = write(dir.path(), "tetra.stl", text.as_bytes());
+    let path = write_file(dir.path(), "tetra.stl", text.as_bytes());
     let mesh = read_mesh(&path).unwrap();
     assert_eq!(mesh.num_faces(), 4);
     // (0,0,1) and (0,0,0.15) differ, so 5 distinct points.
@@ -173,7 +129,7 @@ fn ascii_stl_with_several_solids_is_merged() {
         facet(1.0),
         facet(2.0)
     );
-    let path = write(dir.path(), "two.stl", text.as_bytes());
+    let path = write_file(dir.path(), "two.stl", text.as_bytes());
     let mesh = read_mesh(&path).unwrap();
     assert_eq!((mesh.num_vertices(), mesh.num_faces()), (9, 3));
 }
@@ -181,8 +137,12 @@ fn ascii_stl_with_several_solids_is_merged() {
 #[test]
 fn binary_stl_whose_header_starts_with_solid() {
     let dir = tempfile::tempdir().unwrap();
-    let bytes = binary_stl(b"solid exported by some CAD tool", &cube_triangles());
-    let path = write(dir.path(), "cube.stl", &bytes);
+    let bytes = binary_stl(
+        &stl_header("solid exported by some CAD tool"),
+        12,
+        &cube_triangles(),
+    );
+    let path = write_file(dir.path(), "cube.stl", &bytes);
     let mesh = read_mesh(&path).unwrap();
     assert_eq!((mesh.num_vertices(), mesh.num_faces()), (8, 12));
 }
@@ -190,9 +150,9 @@ fn binary_stl_whose_header_starts_with_solid() {
 #[test]
 fn binary_stl_with_padding_after_the_last_triangle() {
     let dir = tempfile::tempdir().unwrap();
-    let mut bytes = binary_stl(b"padded", &cube_triangles());
+    let mut bytes = binary_stl(&stl_header("padded"), 12, &cube_triangles());
     bytes.extend_from_slice(&[0u8; 30]);
-    let path = write(dir.path(), "padded.stl", &bytes);
+    let path = write_file(dir.path(), "padded.stl", &bytes);
     let mesh = read_mesh(&path).unwrap();
     assert_eq!((mesh.num_vertices(), mesh.num_faces()), (8, 12));
 }
@@ -200,17 +160,15 @@ fn binary_stl_with_padding_after_the_last_triangle() {
 #[test]
 fn stl_cube_welds_to_8_vertices() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write(
+    let path = write_file(
         dir.path(),
         "cube.stl",
-        &binary_stl(b"cube", &cube_triangles()),
+        &binary_stl(&stl_header("cube"), 12, &cube_triangles()),
     );
     let mesh = read_mesh(&path).unwrap();
     assert_eq!((mesh.num_vertices(), mesh.num_faces()), (8, 12));
     // Welding keeps the triangles: each has the corners it had in the file.
-    let (v, f) = cube();
-    let expected = TriMesh::new(v.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect(), f);
-    assert_same_triangles(&expected, &mesh, 0.0);
+    assert_same_triangles(&cube(0.0, 1.0), &mesh, 0.0);
     // Every vertex is shared by several triangles (12·3 corners on 8 vertices).
     let mut uses = vec![0; 8];
     mesh.faces
@@ -229,7 +187,7 @@ fn obj_quads_and_pentagon_are_triangulated() {
         f 1 3 4 2\nf 5/1 6/2 8/1 7/2\nf 1//1 2//1 6//1 5//1\nf 3/1/1 7/1/1 8/1/1 4/1/1\nf 1 5 7 3\nf 2 4 8 6 # comment\n\
         o pentagon\nv 3 0 0\nv 4 0 0\nv 4.5 1 0\nv 3.5 2 0\nv 2.5 1 0\n\
         f -5 -4 -3 -2 -1\nl 9 10\n";
-    let path = write(dir.path(), "poly.obj", text.as_bytes());
+    let path = write_file(dir.path(), "poly.obj", text.as_bytes());
     let mesh = read_mesh(&path).unwrap();
     assert_eq!(mesh.num_vertices(), 13);
     assert_eq!(mesh.num_faces(), 6 * 2 + 3);
@@ -245,27 +203,28 @@ fn obj_several_objects_merge_into_one_mesh() {
     let text = "o first\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n\
         g second\nv 5 0 0\nv 6 0 0\nv 5 1 0\nf 4 5 6\n\
         o third\nv 9 9 9\nf 7 4 6\n";
-    let path = write(dir.path(), "objects.obj", text.as_bytes());
+    let path = write_file(dir.path(), "objects.obj", text.as_bytes());
     let mesh = read_mesh(&path).unwrap();
     assert_eq!((mesh.num_vertices(), mesh.num_faces()), (7, 3));
     assert_eq!(mesh.faces, vec![[0, 1, 2], [3, 4, 5], [6, 3, 5]]);
     assert_eq!(mesh.vertices[3], Point3::new(5.0, 0.0, 0.0));
 }
 
-/// The cube as quads, written as PLY with normals and colors on the vertices, a face flag and a
-/// texture-coordinate list beside the indices, and an extra `edge` element before the faces.
-/// Coordinates are scaled by 0.1 so that float and double storage differ.
+/// The cube [0.3, 0.4]³ as quads (the two triangles of each side of `cube` joined), written as
+/// PLY with normals and colors on the vertices, a face flag and a texture-coordinate list beside
+/// the indices, and an extra `edge` element before the faces. 0.3 and 0.4 are not f32 values, so
+/// float and double storage differ.
 fn cube_quads() -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
-    let (v, _) = cube();
-    let v = v.iter().map(|p| p.map(|c| 0.1 * c + 0.3)).collect();
-    let quads = vec![
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
+    let m = cube(0.3, 0.4);
+    let v = m.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
+    let quads = m
+        .faces
+        .chunks_exact(2)
+        .map(|t| {
+            assert_eq!((t[0][0], t[0][2]), (t[1][0], t[1][1]), "a quad's fan");
+            [t[0][0], t[0][1], t[0][2], t[1][2]]
+        })
+        .collect();
     (v, quads)
 }
 
@@ -358,7 +317,7 @@ fn assert_is_quad_cube(mesh: &TriMesh, z_is_f32: bool) {
 #[test]
 fn ply_ascii_with_quads_and_extra_properties() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "cube.ply", ply_ascii_cube().as_bytes());
+    let path = write_file(dir.path(), "cube.ply", ply_ascii_cube().as_bytes());
     assert_is_quad_cube(&read_mesh(&path).unwrap(), false);
     // The other vertex scalars come back as fields, in header order.
     let (_, fields) = read_ply_scalars(&path).unwrap();
@@ -371,7 +330,7 @@ fn ply_ascii_with_quads_and_extra_properties() {
 #[test]
 fn ply_binary_little_endian_with_quads_and_extra_properties() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "cube.ply", &ply_binary_cube(false));
+    let path = write_file(dir.path(), "cube.ply", &ply_binary_cube(false));
     assert_is_quad_cube(&read_mesh(&path).unwrap(), true);
     let (_, fields) = read_ply_scalars(&path).unwrap();
     assert_eq!(
@@ -386,7 +345,7 @@ fn ply_binary_little_endian_with_quads_and_extra_properties() {
 #[test]
 fn ply_binary_big_endian_with_quads_and_extra_properties() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write(dir.path(), "cube.ply", &ply_binary_cube(true));
+    let path = write_file(dir.path(), "cube.ply", &ply_binary_cube(true));
     assert_is_quad_cube(&read_mesh(&path).unwrap(), true);
 }
 
@@ -438,22 +397,9 @@ fn ply_scalars_round_trip() {
 
 #[test]
 fn real_meshes_read_with_documented_counts_and_survive_every_format() {
-    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"));
-    if !dir.is_dir() {
-        println!("skipping: ../shared/data/real not found");
-        return;
-    }
-    // V and F from ../shared/data/real/SOURCES.md.
-    let table = [
-        ("aorta_abdominal_open_ends.stl", 6068, 11887),
-        ("aorta_abdominal_capped.stl", 6468, 12932),
-        ("carotid_bifurcation.stl", 5829, 11594),
-        ("ica_aneurysm_c0015.stl", 3862, 7485),
-        ("coronary_stenosis_xray.stl", 3232, 6400),
-        ("cortex_rh_pial_fsaverage5.stl", 10242, 20480),
-    ];
+    let Some(dir) = real_dir() else { return };
     let out = tempfile::tempdir().unwrap();
-    for (name, v, f) in table {
+    for (name, v, f, ..) in REAL_MESHES {
         let start = Instant::now();
         let mesh = read_mesh(&dir.join(name)).unwrap();
         let took = start.elapsed();

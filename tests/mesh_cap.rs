@@ -1,12 +1,14 @@
 //! Capping of boundary loops: synthetic tubes, hemisphere, twisted rim, closed meshes, degenerate
 //! input, and the six real meshes.
 
+mod common;
+use common::*;
 use nalgebra::Point3;
 use std::collections::HashMap;
-use std::f64::consts::PI;
-use std::path::Path;
+use std::f64::consts::{PI, TAU};
 use vesselmsr::mesh::cap::{cap_holes, CapMethod, CapOptions, CapReport};
-use vesselmsr::mesh::measures::{signed_volume, triangle_aspect_ratio};
+use vesselmsr::mesh::measures::{mean_edge_length, signed_volume, triangle_aspect_ratio};
+use vesselmsr::mesh::primitives::open_tube;
 use vesselmsr::mesh::topology::{boundary_loops, connected_components};
 use vesselmsr::{Error, TriMesh};
 
@@ -80,28 +82,25 @@ fn tube(
     bottom: impl Fn(f64) -> f64,
     top: impl Fn(f64) -> f64,
 ) -> TriMesh {
-    let mut v = Vec::new();
-    for j in 0..nrings {
-        let t = j as f64 / (nrings - 1) as f64;
-        for i in 0..nseg {
-            let th = 2.0 * PI * i as f64 / nseg as f64;
-            let z = (1.0 - t) * bottom(th) + t * top(th);
-            v.push(Point3::new(r * th.cos(), r * th.sin(), z));
-        }
-    }
-    tube_faces(v, nseg, nrings)
+    tube_through(nseg, nrings, |th, t| {
+        Point3::new(
+            r * th.cos(),
+            r * th.sin(),
+            (1.0 - t) * bottom(th) + t * top(th),
+        )
+    })
 }
 
-fn tube_faces(v: Vec<Point3<f64>>, nseg: usize, nrings: usize) -> TriMesh {
-    let id = |i: usize, j: usize| (j * nseg + i % nseg) as u32;
-    let mut f = Vec::new();
-    for j in 0..nrings - 1 {
-        for i in 0..nseg {
-            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
+/// The connectivity of `open_tube` (ring-major: vertex j·nseg + i is at angle θ = 2πi/nseg on
+/// ring t = j/(nrings−1)) with vertex i of ring j moved to `at(θ, t)`.
+fn tube_through(nseg: usize, nrings: usize, at: impl Fn(f64, f64) -> Point3<f64>) -> TriMesh {
+    let mut m = open_tube(1.0, 1.0, nseg, nrings);
+    for (k, q) in m.vertices.iter_mut().enumerate() {
+        let th = TAU * (k % nseg) as f64 / nseg as f64;
+        assert!((q.x - th.cos()).abs() < 1e-12 && (q.y - th.sin()).abs() < 1e-12);
+        *q = at(th, q.z);
     }
-    TriMesh::new(v, f)
+    m
 }
 
 fn polygon_area(r: f64, n: usize) -> f64 {
@@ -346,17 +345,11 @@ fn twisted_rim_whose_projection_self_intersects_uses_the_fallback() {
     // Top rim (cos θ, sin 2θ, 0.6 sin θ): its best-fit plane is z = const and the projection there
     // is a figure eight, although the space curve itself is simple.
     let (n, nrings) = (64, 12);
-    let mut v = Vec::new();
-    for j in 0..nrings {
-        let t = j as f64 / (nrings - 1) as f64;
-        for i in 0..n {
-            let th = 2.0 * PI * i as f64 / n as f64;
-            let bottom = Point3::new(th.cos(), th.sin(), -4.0);
-            let top = Point3::new(th.cos(), (2.0 * th).sin(), 0.6 * th.sin());
-            v.push(Point3::from(bottom.coords * (1.0 - t) + top.coords * t));
-        }
-    }
-    let m = tube_faces(v, n, nrings);
+    let m = tube_through(n, nrings, |th, t| {
+        let bottom = Point3::new(th.cos(), th.sin(), -4.0);
+        let top = Point3::new(th.cos(), (2.0 * th).sin(), 0.6 * th.sin());
+        Point3::from(bottom.coords * (1.0 - t) + top.coords * t)
+    });
     let loops = boundary_loops(&m);
     assert_eq!(loops.len(), 2);
     let top_loop = loops
@@ -622,30 +615,11 @@ fn degenerate_input_gives_errors_not_panics() {
 
 #[test]
 fn real_meshes_cap_to_closed_outward_single_component() {
-    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"));
-    if !dir.is_dir() {
-        println!("skipping: ../shared/data/real not found");
-        return;
-    }
-    let files = [
-        ("aorta_abdominal_open_ends.stl", 3),
-        ("aorta_abdominal_capped.stl", 0),
-        ("carotid_bifurcation.stl", 3),
-        ("ica_aneurysm_c0015.stl", 3),
-        ("coronary_stenosis_xray.stl", 2),
-        ("cortex_rh_pial_fsaverage5.stl", 0),
-    ];
+    let Some(dir) = real_dir() else { return };
     let mut failures = Vec::new();
-    for (name, loops) in files {
-        let m = vesselmsr::io::read_mesh(&dir.join(name)).unwrap();
-        let mean_edge = {
-            let mut s = 0.0;
-            for f in 0..m.num_faces() {
-                let [a, b, c] = m.triangle(f);
-                s += (b - a).norm() + (c - b).norm() + (a - c).norm();
-            }
-            s / (3 * m.num_faces()) as f64
-        };
+    for (name, _, _, loops, _) in REAL_MESHES {
+        let m = read_real(&dir, name);
+        let mean_edge = mean_edge_length(&m);
         let (out, rep) = cap_holes(&m, &CapOptions::default()).unwrap();
         assert_eq!(rep.loops_capped, loops, "{name}");
         check_closed_oriented(&out).unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -1,16 +1,17 @@
 //! Geometric measures against analytic values, and `mesh_info` against the figures of
 //! ../shared/data/real/SOURCES.md.
 
-use nalgebra::Point3;
-use std::collections::HashMap;
+mod common;
+use common::*;
+use nalgebra::{Point3, Vector3};
 use std::f64::consts::PI;
-use std::path::Path;
 use vesselmsr::mesh::info::mesh_info;
 use vesselmsr::mesh::measures::{
     area, area_centroid, bounding_box, degenerate_faces, euler_characteristic, genus,
     mean_edge_length, signed_volume, signed_volume_about, triangle_aspect_ratio,
 };
 use vesselmsr::mesh::orient::orient_outward;
+use vesselmsr::mesh::primitives::{box_mesh, icosphere};
 use vesselmsr::mesh::topology::Orientation;
 use vesselmsr::TriMesh;
 
@@ -18,95 +19,9 @@ fn p(x: f64, y: f64, z: f64) -> Point3<f64> {
     Point3::new(x, y, z)
 }
 
-/// Axis-aligned box from `o` with sides `s`, 12 outward triangles.
+/// The box from `o` with sides `s`.
 fn box_at(o: Point3<f64>, s: [f64; 3]) -> TriMesh {
-    let v = (0..8)
-        .map(|i| {
-            p(
-                o.x + s[0] * (i & 1) as f64,
-                o.y + s[1] * ((i >> 1) & 1) as f64,
-                o.z + s[2] * ((i >> 2) & 1) as f64,
-            )
-        })
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let f = quads
-        .iter()
-        .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
-        .collect();
-    TriMesh::new(v, f)
-}
-
-/// Icosahedron subdivided `level` times (shared midpoints), projected on the sphere of radius `r`
-/// about `c`; outward.
-fn icosphere(level: u32, r: f64, c: Point3<f64>) -> TriMesh {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut v: Vec<nalgebra::Vector3<f64>> = [
-        [-1., t, 0.],
-        [1., t, 0.],
-        [-1., -t, 0.],
-        [1., -t, 0.],
-        [0., -1., t],
-        [0., 1., t],
-        [0., -1., -t],
-        [0., 1., -t],
-        [t, 0., -1.],
-        [t, 0., 1.],
-        [-t, 0., -1.],
-        [-t, 0., 1.],
-    ]
-    .iter()
-    .map(|a| nalgebra::Vector3::from(*a).normalize())
-    .collect();
-    let mut f: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..level {
-        let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut nf = Vec::with_capacity(4 * f.len());
-        for &[a, b, c] in &f {
-            let mut m = |x: u32, y: u32| {
-                *mid.entry((x.min(y), x.max(y))).or_insert_with(|| {
-                    v.push(((v[x as usize] + v[y as usize]) / 2.0).normalize());
-                    (v.len() - 1) as u32
-                })
-            };
-            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
-            nf.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = nf;
-    }
-    TriMesh::new(v.iter().map(|d| c + d * r).collect(), f)
-}
-
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs()
+    box_mesh(o, o + Vector3::from(s))
 }
 
 #[test]
@@ -302,12 +217,9 @@ fn figure(s: &str) -> (f64, f64) {
     )
 }
 
+/// SOURCES.md figures beyond the counts of `REAL_MESHES`.
 struct Expected {
     file: &'static str,
-    v: usize,
-    f: usize,
-    closed: bool,
-    loops: usize,
     bbox: [&'static str; 3],
     mean_edge: &'static str,
     orientation: Orientation,
@@ -315,100 +227,71 @@ struct Expected {
 
 #[test]
 fn real_meshes_match_sources_md() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real");
-    if !Path::new(dir).is_dir() {
-        println!("skipping: ../shared/data/real not found");
-        return;
-    }
+    let Some(dir) = real_dir() else { return };
     use Orientation::*;
     let table = [
         Expected {
             file: "aorta_abdominal_open_ends.stl",
-            v: 6068,
-            f: 11887,
-            closed: false,
-            loops: 3,
             bbox: ["34.26", "78.04", "22.78"],
             mean_edge: "0.95",
             orientation: Open,
         },
         Expected {
             file: "aorta_abdominal_capped.stl",
-            v: 6468,
-            f: 12932,
-            closed: true,
-            loops: 0,
             bbox: ["34.30", "83.96", "22.91"],
             mean_edge: "0.97",
             orientation: Inward,
         },
         Expected {
             file: "carotid_bifurcation.stl",
-            v: 5829,
-            f: 11594,
-            closed: false,
-            loops: 3,
             bbox: ["0.02231", "0.01554", "0.07117"],
             mean_edge: "0.00048",
             orientation: Open,
         },
         Expected {
             file: "ica_aneurysm_c0015.stl",
-            v: 3862,
-            f: 7485,
-            closed: false,
-            loops: 3,
             bbox: ["9.065", "8.379", "15.53"],
             mean_edge: "0.245",
             orientation: Open,
         },
         Expected {
             file: "coronary_stenosis_xray.stl",
-            v: 3232,
-            f: 6400,
-            closed: false,
-            loops: 2,
             bbox: ["49.99", "21.86", "40.81"],
             mean_edge: "0.575",
             orientation: Open,
         },
         Expected {
             file: "cortex_rh_pial_fsaverage5.stl",
-            v: 10242,
-            f: 20480,
-            closed: true,
-            loops: 0,
             bbox: ["69.97", "173.6", "127.6"],
             mean_edge: "3.10",
             orientation: Outward,
         },
     ];
-    for e in &table {
-        let m = vesselmsr::io::read_mesh(&Path::new(dir).join(e.file)).unwrap();
+    for (file, v, f, loops, closed) in REAL_MESHES {
+        let e = table.iter().find(|e| e.file == file).expect(file);
+        let m = read_real(&dir, file);
         let t = std::time::Instant::now();
         let info = mesh_info(&m);
         let dt = t.elapsed();
         println!(
-            "{}: mesh_info in {:.2} ms\n{info}",
-            e.file,
+            "{file}: mesh_info in {:.2} ms\n{info}",
             dt.as_secs_f64() * 1e3
         );
         println!("{}", serde_json::to_string(&info).unwrap());
-        let name = e.file;
-        assert_eq!((info.vertices, info.faces), (e.v, e.f), "{name}");
-        assert_eq!(info.components, 1, "{name}");
-        assert_eq!(info.non_manifold_edges, 0, "{name}");
-        assert_eq!(info.boundary_loops, e.loops, "{name}");
-        assert_eq!(info.watertight, e.closed, "{name}");
-        assert_eq!(info.orientation, e.orientation, "{name}");
-        assert_eq!(info.volume.is_some(), e.closed, "{name}");
-        assert_eq!(info.genus, if e.closed { Some(0) } else { None }, "{name}");
+        assert_eq!((info.vertices, info.faces), (v, f), "{file}");
+        assert_eq!(info.components, 1, "{file}");
+        assert_eq!(info.non_manifold_edges, 0, "{file}");
+        assert_eq!(info.boundary_loops, loops, "{file}");
+        assert_eq!(info.watertight, closed, "{file}");
+        assert_eq!(info.orientation, e.orientation, "{file}");
+        assert_eq!(info.volume.is_some(), closed, "{file}");
+        assert_eq!(info.genus, if closed { Some(0) } else { None }, "{file}");
         for k in 0..3 {
             let (want, tol) = figure(e.bbox[k]);
             let got = info.bbox_max[k] - info.bbox_min[k];
             assert!(
                 (got - want).abs() <= tol,
-                "{name}: extent {k} is {got}, SOURCES.md says {want}"
+                "{file}: extent {k} is {got}, SOURCES.md says {want}"
             );
         }
         // Mean edge to two significant digits.
@@ -416,7 +299,7 @@ fn real_meshes_match_sources_md() {
         let tol = 0.5 * 10f64.powi(want.log10().floor() as i32 - 1) * (1.0 + 1e-9);
         assert!(
             (info.mean_edge - want).abs() <= tol,
-            "{name}: mean edge {} vs {want}",
+            "{file}: mean edge {} vs {want}",
             info.mean_edge
         );
         // Turning outward: the inward capped aorta is flipped, the cortex is left alone.
@@ -424,16 +307,16 @@ fn real_meshes_match_sources_md() {
         let flipped = orient_outward(&mut turned);
         let c = area_centroid(&m);
         println!(
-            "{name}: volume about the area centroid {}, orient_outward flips {flipped}",
+            "{file}: volume about the area centroid {}, orient_outward flips {flipped}",
             signed_volume_about(&m, &c)
         );
-        if e.closed {
-            assert_eq!(flipped, usize::from(e.orientation == Inward), "{name}");
+        if closed {
+            assert_eq!(flipped, usize::from(e.orientation == Inward), "{file}");
             let after = mesh_info(&turned);
-            assert_eq!(after.orientation, Outward, "{name}");
+            assert_eq!(after.orientation, Outward, "{file}");
             assert!(
                 rel(after.volume.unwrap(), info.volume.unwrap()) < 1e-12,
-                "{name}"
+                "{file}"
             );
         }
     }
@@ -441,15 +324,9 @@ fn real_meshes_match_sources_md() {
 
 #[test]
 fn open_aorta_faces_inward_like_its_capped_sibling() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real");
-    if !Path::new(dir).is_dir() {
-        println!("skipping: ../shared/data/real not found");
-        return;
-    }
-    let open =
-        vesselmsr::io::read_mesh(&Path::new(dir).join("aorta_abdominal_open_ends.stl")).unwrap();
-    let capped =
-        vesselmsr::io::read_mesh(&Path::new(dir).join("aorta_abdominal_capped.stl")).unwrap();
+    let Some(dir) = real_dir() else { return };
+    let open = read_real(&dir, "aorta_abdominal_open_ends.stl");
+    let capped = read_real(&dir, "aorta_abdominal_capped.stl");
     // Ground truth by geometry: compare each sampled open-mesh face normal with the normal of the
     // nearest capped-mesh face (by centroid); the capped mesh is known to face inward.
     let centroid = |m: &TriMesh, f: usize| {

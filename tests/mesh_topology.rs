@@ -1,7 +1,7 @@
 //! Topology queries, orientation and its repair on small generated meshes whose answers are known
 //! by construction.
 
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use std::collections::HashSet;
 use std::f64::consts::TAU;
 use vesselmsr::mesh::info::mesh_info;
@@ -9,6 +9,7 @@ use vesselmsr::mesh::measures::{
     area_centroid, euler_characteristic, genus, signed_volume, signed_volume_about,
 };
 use vesselmsr::mesh::orient::{orient_consistently, orient_outward};
+use vesselmsr::mesh::primitives::{self, box_mesh, open_tube};
 use vesselmsr::mesh::topology::{
     boundary_edges, boundary_loops, connected_components, is_consistently_oriented,
     non_manifold_edges, non_manifold_vertices, orientation, EdgeMap, Orientation,
@@ -27,84 +28,23 @@ fn tetra() -> TriMesh {
     )
 }
 
-/// Axis-aligned box from `o` with sides `s`, 12 outward triangles.
+/// The box from `o` with sides `s`.
 fn cube_at(o: Point3<f64>, s: [f64; 3]) -> TriMesh {
-    let v = (0..8)
-        .map(|i| {
-            p(
-                o.x + s[0] * (i & 1) as f64,
-                o.y + s[1] * ((i >> 1) & 1) as f64,
-                o.z + s[2] * ((i >> 2) & 1) as f64,
-            )
-        })
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let f = quads
-        .iter()
-        .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
-        .collect();
-    TriMesh::new(v, f)
+    box_mesh(o, o + Vector3::from(s))
 }
 
 fn cube() -> TriMesh {
     cube_at(p(0., 0., 0.), [1., 1., 1.])
 }
 
-fn append(a: &mut TriMesh, b: &TriMesh) {
-    let off = a.vertices.len() as u32;
-    a.vertices.extend_from_slice(&b.vertices);
-    a.faces.extend(b.faces.iter().map(|f| f.map(|i| i + off)));
-}
-
-/// Torus as an n × m quad grid, wrapped both ways.
-fn torus(n: u32, m: u32) -> TriMesh {
-    let (big, small) = (3.0, 1.0);
-    let mut v = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            let (u, w) = (TAU * i as f64 / n as f64, TAU * j as f64 / m as f64);
-            let r = big + small * w.cos();
-            v.push(p(r * u.cos(), r * u.sin(), small * w.sin()));
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut f = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            f.push([a, b, c]);
-            f.push([a, c, d]);
-        }
-    }
-    TriMesh::new(v, f)
+/// Torus of radii 3 and 1 about the origin as an n × m quad grid, wrapped both ways.
+fn torus(n: usize, m: usize) -> TriMesh {
+    primitives::torus(3.0, 1.0, n, m, Point3::origin())
 }
 
 /// Open cylinder (radius 1, length 6 along z): `rings` rings of `m` vertices, outward.
-fn tube(rings: u32, m: u32) -> TriMesh {
-    let mut v = Vec::new();
-    for i in 0..rings {
-        for j in 0..m {
-            let t = TAU * j as f64 / m as f64;
-            v.push(p(t.cos(), t.sin(), 6.0 * i as f64 / (rings - 1) as f64));
-        }
-    }
-    let id = |i: u32, j: u32| i * m + (j % m);
-    let mut f = Vec::new();
-    for i in 0..rings - 1 {
-        for j in 0..m {
-            let (a, b, c, d) = (id(i, j), id(i, j + 1), id(i + 1, j + 1), id(i + 1, j));
-            f.push([a, b, c]);
-            f.push([a, c, d]);
-        }
-    }
-    TriMesh::new(v, f)
+fn tube(rings: usize, m: usize) -> TriMesh {
+    open_tube(1.0, 6.0, m, rings)
 }
 
 /// A 3 × 3 grid of unit squares in the plane z = 0 with the middle square missing, facing +z.
@@ -221,7 +161,7 @@ fn torus_has_genus_one() {
     );
     // A torus and a cube: total genus 1 over two components, χ = 0 + 2.
     let mut two = torus(16, 8);
-    append(&mut two, &cube_at(p(10., 0., 0.), [1., 1., 1.]));
+    two.append(&cube_at(p(10., 0., 0.), [1., 1., 1.]));
     assert_eq!(euler_characteristic(&two), 2);
     assert_eq!(genus(&two), Some(1));
 }
@@ -229,7 +169,7 @@ fn torus_has_genus_one() {
 #[test]
 fn two_disjoint_cubes_are_two_components() {
     let mut m = cube();
-    append(&mut m, &cube_at(p(5., 0., 0.), [2., 1., 1.]));
+    m.append(&cube_at(p(5., 0., 0.), [2., 1., 1.]));
     let (n, labels) = connected_components(&m);
     assert_eq!(n, 2);
     assert!(labels[..12].iter().all(|&l| l == 0));
@@ -340,7 +280,7 @@ fn flipped_cube_is_inward_and_orient_outward_fixes_it() {
     let mut two = cube();
     let mut other = cube_at(p(3., 0., 0.), [1., 1., 1.]);
     other.flip_faces();
-    append(&mut two, &other);
+    two.append(&other);
     assert_eq!(orientation(&two), Orientation::Inconsistent);
     assert_eq!(orient_outward(&mut two), 1);
     assert_eq!(orientation(&two), Orientation::Outward);

@@ -11,7 +11,9 @@ use vesselmsr::io::read_mesh;
 use vesselmsr::mesh::measures::{bounding_box, mean_edge_length};
 
 /// Half uniform in the bounding box grown by 20%, half near the surface (a vertex plus a random
-/// offset of up to three mean edges).
+/// offset of up to three mean edges per axis). Not `common::sample_points`: that one offsets by
+/// at most two mean edges in a random direction and puts about half as many points between one
+/// and three mean edges from the surface, the band the winding-sign test below keeps.
 fn test_points(mesh: &vesselmsr::TriMesh, n: usize, seed: u64) -> Vec<Point3<f64>> {
     let mut rng = rng(seed);
     let (lo, hi) = bounding_box(mesh);
@@ -37,8 +39,7 @@ fn closest_distances_equal_libigl() {
     for (file, ..) in REAL_MESHES {
         let path = dir.join(file);
         let mesh = read_mesh(&path).unwrap();
-        let (lo, hi) = bounding_box(&mesh);
-        let diag = (hi - lo).norm();
+        let diag = bbox_diagonal(&mesh);
         let points = test_points(&mesh, 10_000, 7);
         let bvh = MeshBvh::new(&mesh);
         let ours = bvh.closest_points(&points);

@@ -47,15 +47,20 @@ impl ClosestPoint {
     }
 }
 
+/// `num / den` clamped to [0, 1], or 0 when `den` is not positive (a degenerate edge: its start).
+fn unit_fraction(num: f64, den: f64) -> f64 {
+    if den > 0.0 {
+        (num / den).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
 /// Closest point to `p` on the segment a–b, with its parameter along a→b in [0, 1].
 fn closest_on_segment(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> (Point3<f64>, f64) {
     let ab = b - a;
     let len2 = ab.norm_squared();
-    let s = if len2 > 0.0 {
-        ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
+    let s = unit_fraction((p - a).dot(&ab), len2);
     (a + ab * s, s)
 }
 
@@ -143,12 +148,7 @@ fn closest_by_regions(
     // Edge region ab (d1 − d3 = |ab|²).
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let den = d1 - d3;
-        let v = if den > 0.0 {
-            (d1 / den).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
+        let v = unit_fraction(d1, d1 - d3);
         return (a + ab * v, [1.0 - v, v, 0.0]);
     }
 
@@ -163,24 +163,14 @@ fn closest_by_regions(
     // Edge region ac (d2 − d6 = |ac|²).
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let den = d2 - d6;
-        let w = if den > 0.0 {
-            (d2 / den).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
+        let w = unit_fraction(d2, d2 - d6);
         return (a + ac * w, [1.0 - w, 0.0, w]);
     }
 
     // Edge region bc ((d4 − d3) + (d5 − d6) = |bc|²).
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        let den = (d4 - d3) + (d5 - d6);
-        let w = if den > 0.0 {
-            ((d4 - d3) / den).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
+        let w = unit_fraction(d4 - d3, (d4 - d3) + (d5 - d6));
         return (b + (c - b) * w, [0.0, 1.0 - w, w]);
     }
 

@@ -297,32 +297,59 @@ macro_rules! binary_value {
     }};
 }
 
+/// A binary value as stored: integer types widened to i64, float types to f64.
+enum Number {
+    Int(i64),
+    Float(f64),
+}
+
+/// The next ASCII token read by `parse`, or an error naming the line and what was expected.
+fn ascii_value<T>(
+    t: &mut Tokens<'_>,
+    parse: fn(&[u8]) -> Option<T>,
+    expected: &str,
+) -> Result<T, ValueError> {
+    let tok = t.next_token().ok_or(ValueError::End)?;
+    parse(tok).ok_or_else(|| {
+        ValueError::Bad(format!(
+            "PLY line {}: '{}' is not {expected}",
+            t.line(),
+            show(tok)
+        ))
+    })
+}
+
+/// The next binary value of type `s` at `pos`, which it advances.
+fn binary_number(
+    data: &[u8],
+    pos: &mut usize,
+    big_endian: bool,
+    s: Scalar,
+) -> Result<Number, ValueError> {
+    use Number::{Float, Int};
+    Ok(match s {
+        Scalar::I8 => Int(binary_value!(data, pos, big_endian, i8).into()),
+        Scalar::U8 => Int(binary_value!(data, pos, big_endian, u8).into()),
+        Scalar::I16 => Int(binary_value!(data, pos, big_endian, i16).into()),
+        Scalar::U16 => Int(binary_value!(data, pos, big_endian, u16).into()),
+        Scalar::I32 => Int(binary_value!(data, pos, big_endian, i32).into()),
+        Scalar::U32 => Int(binary_value!(data, pos, big_endian, u32).into()),
+        Scalar::F32 => Float(binary_value!(data, pos, big_endian, f32).into()),
+        Scalar::F64 => Float(binary_value!(data, pos, big_endian, f64)),
+    })
+}
+
 impl Body<'_> {
     fn float(&mut self, s: Scalar) -> Result<f64, ValueError> {
         match self {
-            Body::Ascii(t) => {
-                let tok = t.next_token().ok_or(ValueError::End)?;
-                parse_f64(tok).ok_or_else(|| {
-                    ValueError::Bad(format!(
-                        "PLY line {}: '{}' is not a number",
-                        t.line(),
-                        show(tok)
-                    ))
-                })
-            }
+            Body::Ascii(t) => ascii_value(t, parse_f64, "a number"),
             Body::Binary {
                 data,
                 pos,
                 big_endian,
-            } => Ok(match s {
-                Scalar::I8 => binary_value!(data, pos, *big_endian, i8) as f64,
-                Scalar::U8 => binary_value!(data, pos, *big_endian, u8) as f64,
-                Scalar::I16 => binary_value!(data, pos, *big_endian, i16) as f64,
-                Scalar::U16 => binary_value!(data, pos, *big_endian, u16) as f64,
-                Scalar::I32 => binary_value!(data, pos, *big_endian, i32) as f64,
-                Scalar::U32 => binary_value!(data, pos, *big_endian, u32) as f64,
-                Scalar::F32 => binary_value!(data, pos, *big_endian, f32) as f64,
-                Scalar::F64 => binary_value!(data, pos, *big_endian, f64),
+            } => Ok(match binary_number(data, pos, *big_endian, s)? {
+                Number::Int(i) => i as f64,
+                Number::Float(x) => x,
             }),
         }
     }
@@ -330,31 +357,15 @@ impl Body<'_> {
     /// An integer value (`s` is an integer type: checked in the header or by the caller).
     fn integer(&mut self, s: Scalar) -> Result<i64, ValueError> {
         match self {
-            Body::Ascii(t) => {
-                let tok = t.next_token().ok_or(ValueError::End)?;
-                parse_i64(tok).ok_or_else(|| {
-                    ValueError::Bad(format!(
-                        "PLY line {}: '{}' is not an integer",
-                        t.line(),
-                        show(tok)
-                    ))
-                })
-            }
+            Body::Ascii(t) => ascii_value(t, parse_i64, "an integer"),
             Body::Binary {
                 data,
                 pos,
                 big_endian,
-            } => Ok(match s {
-                Scalar::I8 => binary_value!(data, pos, *big_endian, i8) as i64,
-                Scalar::U8 => binary_value!(data, pos, *big_endian, u8) as i64,
-                Scalar::I16 => binary_value!(data, pos, *big_endian, i16) as i64,
-                Scalar::U16 => binary_value!(data, pos, *big_endian, u16) as i64,
-                Scalar::I32 => binary_value!(data, pos, *big_endian, i32) as i64,
-                Scalar::U32 => binary_value!(data, pos, *big_endian, u32) as i64,
-                Scalar::F32 | Scalar::F64 => {
-                    return Err(ValueError::Bad("float where an integer belongs".into()))
-                }
-            }),
+            } => match binary_number(data, pos, *big_endian, s)? {
+                Number::Int(i) => Ok(i),
+                Number::Float(_) => Err(ValueError::Bad("float where an integer belongs".into())),
+            },
         }
     }
 

@@ -1,11 +1,22 @@
-//! Shared helpers of the integration tests: where the real meshes are, the CLI binary, and the
-//! Python reference oracle (reference/oracle.py) run in the project's virtual environment.
+//! Shared helpers of the integration tests: where the real meshes are, the CLI binary, the
+//! Python reference oracle (reference/oracle.py) run in the project's virtual environment, seeded
+//! query points (points.rs), test shapes built on the library primitives (shapes.rs) and
+//! hand-made mesh files (files.rs). A test file uses them with `mod common; use common::*;`.
 #![allow(dead_code)]
+
+mod files;
+mod points;
+mod shapes;
+
+// Each test file uses only some of the helpers.
+#[allow(unused_imports)]
+pub use {files::*, points::*, shapes::*};
 
 use nalgebra::Point3;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use vesselmsr::TriMesh;
 
 /// The six real meshes of ../shared/data/real with the counts its SOURCES.md gives:
 /// (file, vertices, faces, boundary loops, closed).
@@ -27,6 +38,37 @@ pub fn real_dir() -> Option<PathBuf> {
         println!("skipping: ../shared/data/real not found");
         None
     }
+}
+
+/// The six real meshes of [`REAL_MESHES`] as (file name, mesh), or None (with the notice of
+/// [`real_dir`]) when ../shared is absent.
+pub fn real_meshes() -> Option<Vec<(String, TriMesh)>> {
+    let dir = real_dir()?;
+    Some(
+        REAL_MESHES
+            .iter()
+            .map(|&(file, ..)| (file.to_string(), read_real(&dir, file)))
+            .collect(),
+    )
+}
+
+/// Reads `file` of the real-mesh folder `dir`, panicking with the path when it cannot.
+pub fn read_real(dir: &Path, file: &str) -> TriMesh {
+    let path = dir.join(file);
+    vesselmsr::io::read_mesh(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Relative difference |a − b| / |b| (b = 0 counts as the smallest positive number).
+pub fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(f64::MIN_POSITIVE)
+}
+
+/// Asserts that `ours` equals pymeshlab's `theirs` within 1e-6 relative, printing both as
+/// "{what} ours vs pymeshlab theirs (rel …)".
+pub fn assert_matches_pymeshlab(what: &str, ours: f64, theirs: f64) {
+    let r = rel(ours, theirs);
+    println!("{what} {ours} vs pymeshlab {theirs} (rel {r:.2e})");
+    assert!(r < 1e-6, "{what} {ours} vs pymeshlab {theirs}");
 }
 
 /// The project's shipped sample folder.
@@ -51,6 +93,11 @@ pub fn vesselmsr_json(args: &[&str]) -> Value {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).expect("stdout is JSON")
+}
+
+/// `vesselmsr info --json <path>`, parsed.
+pub fn info_json(path: &Path) -> Value {
+    vesselmsr_json(&["info", "--json", path.to_str().unwrap()])
 }
 
 /// The Python reference oracle.
