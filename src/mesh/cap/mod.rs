@@ -344,7 +344,8 @@ fn append_patch(
     out.vertices.extend_from_slice(&patch.new_points);
     let global = |i: usize| if i < n { cyc[i] } else { base + (i - n) as u32 };
     let rim: HashSet<(u32, u32)> = (0..n).map(|i| ekey(cyc[i], cyc[(i + 1) % n])).collect();
-    let mut inner_edges: HashSet<(u32, u32)> = HashSet::new();
+    // Ordered, so the reported mean is the same to the last digit on every run.
+    let mut inner_edges: std::collections::BTreeSet<(u32, u32)> = Default::default();
     let mut max_ar: f64 = 0.0;
     for f in &patch.faces {
         let g = [global(f[0]), global(f[1]), global(f[2])];
