@@ -9,6 +9,7 @@
 pub mod bvh;
 pub mod cli;
 pub mod error;
+pub mod grid;
 pub mod io;
 pub mod mesh;
 

@@ -1,0 +1,8 @@
+//! Dense 3-D grids of f32 values (x fastest) with an index↔world transform: the level-set
+//! function φ of the paper lives here (negative inside).
+
+mod grid3;
+mod transform;
+
+pub use grid3::Grid3;
+pub use transform::GridTransform;
