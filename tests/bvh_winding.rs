@@ -10,197 +10,13 @@ use nalgebra::{Point3, Vector3};
 use rand::prelude::*;
 use rayon::prelude::*;
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
 use vesselmsr::bvh::brute::winding_number_exact;
 use vesselmsr::bvh::{solid_angle, MeshBvh, WindingNumber, WindingOptions};
+use vesselmsr::mesh::primitives::icosphere;
 use vesselmsr::TriMesh;
 
-const REAL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real");
-const FILES: [&str; 6] = [
-    "aorta_abdominal_open_ends.stl",
-    "aorta_abdominal_capped.stl",
-    "carotid_bifurcation.stl",
-    "ica_aneurysm_c0015.stl",
-    "coronary_stenosis_xray.stl",
-    "cortex_rh_pial_fsaverage5.stl",
-];
-
-fn real_meshes() -> Option<Vec<(String, TriMesh)>> {
-    if !Path::new(REAL).is_dir() {
-        println!("skipping: ../shared/data/real not found");
-        return None;
-    }
-    Some(
-        FILES
-            .iter()
-            .map(|f| {
-                let path = PathBuf::from(REAL).join(f);
-                let mesh = vesselmsr::io::read_mesh(&path).expect("read real mesh");
-                (f.to_string(), mesh)
-            })
-            .collect(),
-    )
-}
-
-fn bbox(mesh: &TriMesh) -> (Point3<f64>, Point3<f64>) {
-    let mut lo = mesh.vertices[0];
-    let mut hi = lo;
-    for v in &mesh.vertices {
-        lo = lo.inf(v);
-        hi = hi.sup(v);
-    }
-    (lo, hi)
-}
-
-fn mean_edge(mesh: &TriMesh) -> f64 {
-    let mut s = 0.0;
-    for f in 0..mesh.num_faces() {
-        let [a, b, c] = mesh.triangle(f);
-        s += (b - a).norm() + (c - b).norm() + (a - c).norm();
-    }
-    s / (3.0 * mesh.num_faces() as f64)
-}
-
-fn unit_vector(rng: &mut StdRng) -> Vector3<f64> {
-    loop {
-        let v = Vector3::new(
-            rng.random::<f64>() * 2.0 - 1.0,
-            rng.random::<f64>() * 2.0 - 1.0,
-            rng.random::<f64>() * 2.0 - 1.0,
-        );
-        let n = v.norm();
-        if n > 1e-3 && n <= 1.0 {
-            return v / n;
-        }
-    }
-}
-
-/// `n` query points: half uniform in the bounding box enlarged by 20 %, half a random surface
-/// point (area-weighted) plus a random offset of up to two mean edges.
-fn sample_points(mesh: &TriMesh, n: usize, seed: u64) -> Vec<Point3<f64>> {
-    let mut rng = StdRng::seed_from_u64(seed);
-    let (lo, hi) = bbox(mesh);
-    let c = nalgebra::center(&lo, &hi);
-    let half = (hi - lo) * 0.6;
-    let h = mean_edge(mesh);
-    let mut cum = Vec::with_capacity(mesh.num_faces());
-    let mut total = 0.0;
-    for f in 0..mesh.num_faces() {
-        total += 0.5 * mesh.face_normal_raw(f).norm();
-        cum.push(total);
-    }
-    let mut pts = Vec::with_capacity(n);
-    for i in 0..n {
-        if i % 2 == 0 {
-            let u = Vector3::from_fn(|_, _| rng.random::<f64>() * 2.0 - 1.0);
-            pts.push(c + half.component_mul(&u));
-        } else {
-            let x = rng.random::<f64>() * total;
-            let f = cum.partition_point(|&s| s < x).min(mesh.num_faces() - 1);
-            let [a, b, cc] = mesh.triangle(f);
-            let (mut r1, mut r2) = (rng.random::<f64>(), rng.random::<f64>());
-            if r1 + r2 > 1.0 {
-                r1 = 1.0 - r1;
-                r2 = 1.0 - r2;
-            }
-            let s = a + (b - a) * r1 + (cc - a) * r2;
-            pts.push(s + unit_vector(&mut rng) * (rng.random::<f64>() * 2.0 * h));
-        }
-    }
-    pts
-}
-
-/// Icosphere: icosahedron subdivided `levels` times, projected to the sphere; outward faces.
-fn icosphere(levels: usize, radius: f64, center: Point3<f64>) -> TriMesh {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut v: Vec<Vector3<f64>> = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .iter()
-    .map(|p| Vector3::from(*p).normalize())
-    .collect();
-    let mut f: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid = std::collections::HashMap::new();
-        let mut nf = Vec::with_capacity(f.len() * 4);
-        let mut midpoint = |a: u32, b: u32, v: &mut Vec<Vector3<f64>>| -> u32 {
-            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                v.push(((v[a as usize] + v[b as usize]) * 0.5).normalize());
-                (v.len() - 1) as u32
-            })
-        };
-        for [a, b, c] in f {
-            let ab = midpoint(a, b, &mut v);
-            let bc = midpoint(b, c, &mut v);
-            let ca = midpoint(c, a, &mut v);
-            nf.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = nf;
-    }
-    let verts = v.iter().map(|d| center + d * radius).collect();
-    TriMesh::new(verts, f)
-}
-
-/// Axis-aligned cube [lo, hi]³ with outward faces; `skip` leaves out face pair `skip` (0..6).
-fn cube(lo: f64, hi: f64, skip: Option<usize>) -> TriMesh {
-    let mut v = Vec::new();
-    for i in 0..8 {
-        v.push(Point3::new(
-            if i & 1 == 0 { lo } else { hi },
-            if i & 2 == 0 { lo } else { hi },
-            if i & 4 == 0 { lo } else { hi },
-        ));
-    }
-    // Quads counter-clockwise seen from outside: -x, +x, -y, +y, -z, +z.
-    let quads = [
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-    ];
-    let mut f = Vec::new();
-    for (k, [a, b, c, d]) in quads.into_iter().enumerate() {
-        if Some(k) != skip {
-            f.push([a, b, c]);
-            f.push([a, c, d]);
-        }
-    }
-    TriMesh::new(v, f)
-}
+mod common;
+use common::*;
 
 /// The setting of Barill et al. (2018): second order, β = 2 (about 1e-2 on the real meshes).
 const PAPER: WindingOptions = WindingOptions {
@@ -228,7 +44,7 @@ fn octant_solid_angle() {
 
 #[test]
 fn cube_inside_outside_and_flipped() {
-    let mut mesh = cube(-1.0, 1.0, None);
+    let mut mesh = cube(-1.0, 1.0);
     let default = WindingNumber::new(&mesh, WindingOptions::default());
     let paper = WindingNumber::new(&mesh, PAPER);
     mesh.flip_faces();
@@ -273,7 +89,7 @@ fn cube_inside_outside_and_flipped() {
 fn open_box_is_half_across_its_opening() {
     // Unit cube without its +z face: from a point of the missing face's plane the five faces
     // fill a half-space of directions, so w = 1/2 anywhere inside the opening.
-    let mesh = cube(0.0, 1.0, Some(5));
+    let mesh = cube_without_side(0.0, 1.0, 5);
     let fast = WindingNumber::new(&mesh, WindingOptions::default());
     for (x, y) in [(0.5, 0.5), (0.1, 0.8), (0.97, 0.02)] {
         let p = Point3::new(x, y, 1.0);
@@ -298,8 +114,7 @@ fn max_error(wn: &WindingNumber, pts: &[Point3<f64>], exact: &[f64]) -> f64 {
 fn real_meshes_fast_equals_exact() {
     let Some(meshes) = real_meshes() else { return };
     for (name, mesh) in &meshes {
-        let (lo, hi) = bbox(mesh);
-        let diag = (hi - lo).norm();
+        let diag = bbox_diagonal(mesh);
         let bvh = MeshBvh::new(mesh);
         let pts = sample_points(mesh, 10_000, 43);
         let exact: Vec<f64> = pts
