@@ -273,3 +273,28 @@ fn memory_sizes_parse() {
     assert_eq!(format_bytes(1536), "1.5 KiB");
     assert_eq!(format_bytes(100), "100 B");
 }
+
+#[test]
+fn a_flat_mesh_gets_one_node_layer_plus_padding() {
+    let square = TriMesh::new(
+        vec![
+            Point3::new(0.0, 0.0, 2.0),
+            Point3::new(3.0, 0.0, 2.0),
+            Point3::new(3.0, 1.5, 2.0),
+            Point3::new(0.0, 1.5, 2.0),
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+    );
+    let spec = grid_for_mesh(
+        &square,
+        &GridOptions {
+            resolution: Some(12),
+            padding_voxels: 2,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(spec.dims, [12 + 1 + 4, 6 + 1 + 4, 1 + 4]);
+    assert_layout(&square, &spec, 0.25, 2);
+    assert_eq!(spec.transform.origin[2], 2.0 - 2.0 * 0.25);
+}
