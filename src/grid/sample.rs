@@ -9,7 +9,7 @@
 //! **Trilinear.** The usual interpolation between the 8 nodes of the cell holding the point:
 //! exact on fields linear in each coordinate, C⁰ across cell faces, value error O(h²), gradient
 //! error O(h). The gradient is the derivative of the interpolant inside the cell (a point on a
-//! cell face uses the cell on its low side, except on the grid's high face).
+//! cell face takes the cell on its high side, except on the grid's high face).
 //!
 //! **Tricubic.** The tensor product of Catmull-Rom splines, i.e. Keys' cubic convolution
 //! (R. Keys, "Cubic convolution interpolation for digital image processing", IEEE Trans. ASSP 29,
