@@ -5,15 +5,22 @@
 //! read is validated: finite coordinates, at least one triangle, indices in range, and at least one
 //! non-degenerate triangle. Every error names the file and the problem in one line. Writers go
 //! through [`write_atomic`], so a failed write leaves no partial file.
+//!
+//! Grids (level-set functions) are written as NumPy `.npy` with a JSON sidecar (`npy`) and as
+//! VTK ImageData `.vti` (`vti`).
 
 mod atomic;
+mod npy;
 mod obj;
 mod ply;
 mod stl;
 mod text;
 mod validate;
+mod vti;
 
 pub use atomic::write_atomic;
+pub use npy::{npy_sidecar_path, read_npy, write_npy, NpySidecar};
+pub use vti::{read_vti, write_vti, VTI_ARRAY_NAME};
 
 use crate::{Error, Result, TriMesh};
 use std::path::Path;
