@@ -9,7 +9,6 @@ mod common;
 use common::*;
 use nalgebra::{Point3, Vector3};
 use rand::RngExt;
-use std::time::Instant;
 use vesselmsr::grid::{Grid3, GridTransform};
 
 /// A grid of `dims` with node (0,0,0) at `origin` and voxel `h`, filled with `f` at the nodes.
@@ -291,28 +290,4 @@ fn convergence_orders_on_a_sphere_distance() {
     for e in &errs {
         assert!(e[2] < e[0] && e[3] < e[1]);
     }
-}
-
-#[test]
-fn sampling_speed() {
-    let n = 129;
-    let h = 2.0 / (n - 1) as f64;
-    let g = grid_of([n; 3], [-1.0; 3], h, |p| p.coords.norm() - 0.5);
-    let pts = points_in(&g, 1_000_000, 7);
-    let time = |name: &str, f: &dyn Fn(&Point3<f64>) -> f64| {
-        let t = Instant::now();
-        let s: f64 = pts.iter().map(f).sum();
-        let ns = t.elapsed().as_secs_f64() * 1e9 / pts.len() as f64;
-        println!("{name}: {ns:.0} ns per point (checksum {s:.3})");
-        // About 50-80 ns on the project's machine; 2 µs would mean something went badly wrong.
-        assert!(s.is_finite() && ns < 2000.0, "{name}: {ns:.0} ns per point");
-    };
-    time("trilinear value", &|p| g.sample_trilinear(p).unwrap());
-    time("trilinear value+gradient", &|p| {
-        g.sample_trilinear_with_gradient(p).unwrap().1.x
-    });
-    time("tricubic value", &|p| g.sample_tricubic(p).unwrap());
-    time("tricubic value+gradient", &|p| {
-        g.sample_tricubic_with_gradient(p).unwrap().1.x
-    });
 }
