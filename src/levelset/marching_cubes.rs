@@ -60,7 +60,7 @@ impl Default for ExtractOptions {
 /// Vertices stay at least this fraction of their grid edge away from the edge's nodes.
 const MIN_EDGE_FRACTION: f64 = 1e-3;
 /// Cube layers per parallel work item (fixed, so the output does not depend on thread count).
-const SLAB_LAYERS: usize = 4;
+const SLAB_LAYERS: usize = 8;
 /// Marks a vertex index that belongs to the next slab (resolved when the slabs are joined).
 const FOREIGN: u32 = 1 << 31;
 
@@ -81,9 +81,23 @@ pub fn extract_surface(phi: &Grid3, opts: &ExtractOptions) -> Result<TriMesh> {
         .step_by(SLAB_LAYERS)
         .map(|r0| (r0, (r0 + SLAB_LAYERS).min(layers)))
         .collect();
+    let params = collapse::CollapseParams {
+        max_length: opts.collapse_below * ex.h,
+        voxel: ex.h,
+        origin: ex.origin,
+    };
     let parts: Vec<SlabOut> = slabs
         .par_iter()
-        .map_init(|| ex.buffers(), |buf, &(r0, r1)| ex.run_slab(r0, r1, buf))
+        .map_init(
+            || ex.buffers(),
+            |buf, &(r0, r1)| {
+                let mut part = ex.run_slab(r0, r1, buf);
+                if opts.collapse_below > 0.0 {
+                    ex.collapse_slab(&mut part, r0, r1, &params);
+                }
+                part
+            },
+        )
         .collect();
 
     // Join the slabs: local indices become global, FOREIGN ones point into the next slab.
@@ -114,30 +128,50 @@ pub fn extract_surface(phi: &Grid3, opts: &ExtractOptions) -> Result<TriMesh> {
                 }
             })
         }));
-        near.extend(p.near.iter().map(|&i| own + i));
+        near.extend(p.near.iter().map(|&(i, _)| own + i));
     }
     drop(parts);
-    let mut mesh = TriMesh::new(vertices, faces);
-    if opts.collapse_below > 0.0 && !near.is_empty() {
-        collapse::collapse_short_edges(
-            &mut mesh,
-            &near,
-            &collapse::CollapseParams {
-                max_length: opts.collapse_below * ex.h,
-                voxel: ex.h,
-                origin: ex.origin,
-            },
-        );
+    // The clusters on the slabs' shared node layers, left by the slabs.
+    if !near.is_empty() {
+        let merged = collapse::collapse_short_edges(&vertices, &mut faces, &near, &params);
+        if !merged.is_empty() {
+            compact(&mut vertices, &mut faces, &merged);
+        }
     }
-    Ok(mesh)
+    Ok(TriMesh::new(vertices, faces))
 }
 
-/// One slab's vertices (local numbering), triangles (local or FOREIGN indices) and the local
-/// indices of vertices near a grid node (collapse candidates).
+/// Drops dead faces and the `merged` vertices, keeping the order of the rest; returns the new
+/// index of each old vertex (u32::MAX for dropped ones).
+fn compact(vertices: &mut Vec<Point3<f64>>, faces: &mut Vec<[u32; 3]>, merged: &[u32]) -> Vec<u32> {
+    faces.retain(|f| f[0] != collapse::DEAD);
+    let mut new_index = vec![0u32; vertices.len()];
+    for &v in merged {
+        new_index[v as usize] = u32::MAX;
+    }
+    let mut kept = 0usize;
+    for i in 0..vertices.len() {
+        if new_index[i] == 0 {
+            vertices[kept] = vertices[i];
+            new_index[i] = kept as u32;
+            kept += 1;
+        }
+    }
+    vertices.truncate(kept);
+    for v in faces.iter_mut().flatten() {
+        *v = new_index[*v as usize];
+    }
+    new_index
+}
+
+/// One slab's vertices (local numbering), triangles (local or FOREIGN indices), the vertices
+/// near a grid node (collapse candidates: local index, padded z-layer of the node) and the
+/// positions of the FOREIGN vertices it refers to (the next slab's, in its numbering).
 struct SlabOut {
     vertices: Vec<Point3<f64>>,
     faces: Vec<[u32; 3]>,
-    near: Vec<u32>,
+    near: Vec<(u32, u32)>,
+    foreign: Vec<Point3<f64>>,
 }
 
 /// Per-thread scratch: vertex indices of the crossed edges of the current layers, indexed by
@@ -257,15 +291,14 @@ impl<'a> Extractor<'a> {
         (g, t)
     }
 
+    /// World position of grid coordinates `g`.
     #[inline]
-    fn push_vertex(&self, g: [f64; 3], out: &mut SlabOut) -> u32 {
-        let id = out.vertices.len() as u32;
-        out.vertices.push(Point3::new(
+    fn to_world(&self, g: [f64; 3]) -> Point3<f64> {
+        Point3::new(
             self.origin[0] + self.h * g[0],
             self.origin[1] + self.h * g[1],
             self.origin[2] + self.h * g[2],
-        ));
-        id
+        )
     }
 
     /// Creates the vertex on the crossed edge from padded node (p, q, r) along `axis`.
@@ -273,9 +306,21 @@ impl<'a> Extractor<'a> {
     fn make_vertex(&self, p: usize, q: usize, r: usize, axis: usize, out: &mut SlabOut) -> u32 {
         let (g, t) = self.crossing(p, q, r, axis);
         if self.near > 0.0 && (t < self.near || t > 1.0 - self.near) {
-            out.near.push(out.vertices.len() as u32);
+            let layer = if axis == 2 && t > 0.5 { r + 1 } else { r };
+            out.near.push((out.vertices.len() as u32, layer as u32));
         }
-        self.push_vertex(g, out)
+        let id = out.vertices.len() as u32;
+        out.vertices.push(self.to_world(g));
+        id
+    }
+
+    /// A vertex of the next slab (its crossed x- or y-edge on the shared node layer): numbered
+    /// in the order that slab creates them, its position kept for the collapse checks.
+    #[inline]
+    fn foreign_vertex(&self, p: usize, q: usize, r: usize, axis: usize, out: &mut SlabOut) -> u32 {
+        let (g, _) = self.crossing(p, q, r, axis);
+        out.foreign.push(self.to_world(g));
+        FOREIGN | (out.foreign.len() as u32 - 1)
     }
 
     /// Creates the centre vertex of a polygon of cube (p, q, r): the mean of its crossings.
@@ -291,21 +336,15 @@ impl<'a> Extractor<'a> {
             );
             (0..3).for_each(|i| sum[i] += g[i]);
         }
-        self.push_vertex(sum.map(|x| x / poly.len() as f64), out)
+        out.vertices
+            .push(self.to_world(sum.map(|x| x / poly.len() as f64)));
+        out.vertices.len() as u32 - 1
     }
 
     /// Numbers the crossed x- and y-edges of padded node layer r into `ix`, `iy` (rows in order,
     /// x-edges then y-edges of each row). `own`: create the vertices; otherwise only number them
     /// as FOREIGN (they belong to the next slab, which numbers them first, in the same order).
-    fn layer_xy(
-        &self,
-        r: usize,
-        own: bool,
-        ix: &mut [u32],
-        iy: &mut [u32],
-        out: &mut SlabOut,
-        foreign: &mut u32,
-    ) {
+    fn layer_xy(&self, r: usize, own: bool, ix: &mut [u32], iy: &mut [u32], out: &mut SlabOut) {
         for q in 1..self.py - 1 {
             let row = self.row(q, r);
             let below = self.row(q + 1, r);
@@ -318,8 +357,7 @@ impl<'a> Extractor<'a> {
                     ix[q * self.px + p] = if own {
                         self.make_vertex(p, q, r, 0, out)
                     } else {
-                        *foreign += 1;
-                        FOREIGN | (*foreign - 1)
+                        self.foreign_vertex(p, q, r, 0, out)
                     };
                 }
             }
@@ -331,8 +369,7 @@ impl<'a> Extractor<'a> {
                     iy[q * self.px + p] = if own {
                         self.make_vertex(p, q, r, 1, out)
                     } else {
-                        *foreign += 1;
-                        FOREIGN | (*foreign - 1)
+                        self.foreign_vertex(p, q, r, 1, out)
                     };
                 }
             }
@@ -347,8 +384,7 @@ impl<'a> Extractor<'a> {
                 iy[p] = if own {
                     self.make_vertex(p, 0, r, 1, out)
                 } else {
-                    *foreign += 1;
-                    FOREIGN | (*foreign - 1)
+                    self.foreign_vertex(p, 0, r, 1, out)
                 };
             }
         }
@@ -375,24 +411,78 @@ impl<'a> Extractor<'a> {
             vertices: Vec::new(),
             faces: Vec::new(),
             near: Vec::new(),
+            foreign: Vec::new(),
         };
-        let mut foreign = 0u32;
         let Buffers { ix, iy, iz } = buf;
         {
             let s = r0 & 1;
-            self.layer_xy(r0, true, &mut ix[s], &mut iy[s], &mut out, &mut foreign);
+            self.layer_xy(r0, true, &mut ix[s], &mut iy[s], &mut out);
         }
         self.layer_z(r0, iz, &mut out);
         for r in r0..r1 {
             let s = (r + 1) & 1;
             let own = r + 1 < r1;
-            self.layer_xy(r + 1, own, &mut ix[s], &mut iy[s], &mut out, &mut foreign);
+            self.layer_xy(r + 1, own, &mut ix[s], &mut iy[s], &mut out);
             self.emit_layer(r, ix, iy, iz, &mut out);
             if own {
                 self.layer_z(r + 1, iz, &mut out);
             }
         }
         out
+    }
+
+    /// Collapses the short edges of this slab's clusters whose node has all its cubes in the
+    /// slab (cube layers r0..r1); those of nodes on the layers shared with the neighbouring
+    /// slabs stay in `near` for the pass over the joined mesh.
+    fn collapse_slab(
+        &self,
+        part: &mut SlabOut,
+        r0: usize,
+        r1: usize,
+        params: &collapse::CollapseParams,
+    ) {
+        let last = self.pz - 1;
+        let here = |z: u32| {
+            let z = z as usize;
+            (z == 0 || z > r0) && (z < r1 || z == last)
+        };
+        let local: Vec<u32> = part
+            .near
+            .iter()
+            .filter(|&&(_, z)| here(z))
+            .map(|&(v, _)| v)
+            .collect();
+        if local.is_empty() {
+            return;
+        }
+        // One index space: own vertices, then the foreign ones.
+        let own = part.vertices.len();
+        part.vertices.extend_from_slice(&part.foreign);
+        for v in part.faces.iter_mut().flatten() {
+            if *v & FOREIGN != 0 {
+                *v = own as u32 + (*v & !FOREIGN);
+            }
+        }
+        let merged =
+            collapse::collapse_short_edges(&part.vertices, &mut part.faces, &local, params);
+        if !merged.is_empty() {
+            // Only candidates (own vertices off the shared layers) are merged away: the first
+            // vertices, which the previous slab refers to, and the foreign ones keep their order.
+            let new_index = compact(&mut part.vertices, &mut part.faces, &merged);
+            part.near.retain(|&(_, z)| !here(z));
+            for (v, _) in &mut part.near {
+                *v = new_index[*v as usize];
+            }
+        } else {
+            part.near.retain(|&(_, z)| !here(z));
+        }
+        let own = part.vertices.len() - part.foreign.len();
+        part.vertices.truncate(own);
+        for v in part.faces.iter_mut().flatten() {
+            if *v as usize >= own {
+                *v = FOREIGN | (*v - own as u32);
+            }
+        }
     }
 
     /// Emits the triangles of cube layer r.
@@ -522,16 +612,32 @@ fn two_bits(row: &[u64], p: usize) -> usize {
 /// returns whether the row holds a NaN.
 fn fill_row(values: &[f32], out: &mut [u64]) -> bool {
     let mut nan = false;
-    for (c, chunk) in values.chunks(64).enumerate() {
-        let mut m = 0u64;
-        for (b, &v) in chunk.iter().enumerate() {
-            m |= ((v < 0.0) as u64) << b;
-            nan |= v.is_nan();
-        }
+    let mut put = |c: usize, m: u64| {
         out[c] |= m << 1;
         if let Some(w) = out.get_mut(c + 1) {
             *w |= m >> 63;
         }
+    };
+    let chunks = values.chunks_exact(64);
+    let rest = chunks.remainder();
+    let full = values.len() / 64;
+    for (c, chunk) in chunks.enumerate() {
+        // Fixed-length loops over 64 lanes: compiled to vector compares and mask moves.
+        let chunk: &[f32; 64] = chunk.try_into().expect("64 values");
+        let mut m = 0u64;
+        let mut any_nan = false;
+        for (b, &v) in chunk.iter().enumerate() {
+            m |= ((v < 0.0) as u64) << b;
+            any_nan |= v.is_nan();
+        }
+        nan |= any_nan;
+        put(c, m);
     }
+    let mut m = 0u64;
+    for (b, &v) in rest.iter().enumerate() {
+        m |= ((v < 0.0) as u64) << b;
+        nan |= v.is_nan();
+    }
+    put(full, m);
     nan
 }
