@@ -17,19 +17,26 @@
 //! - **Cases.** Faces with two inside corners on a diagonal are resolved by the asymptotic
 //!   decider (Nielson and Hamann 1991) from the face's four values, so the two cubes sharing the
 //!   face agree; each closed curve on a cube's faces is capped by its own disk (interior
-//!   ambiguities never get a tunnel through the cube). Every mesh edge then has exactly two
-//!   triangles, every vertex one fan, and all triangles agree in orientation. The case table is
-//!   generated from this rule (see `table`).
+//!   ambiguities never get a tunnel through the cube: the only departure from the topology of
+//!   the trilinear interpolant, and a consistent one). A disk is triangulated without diagonals
+//!   between two crossings on one face; where that is impossible (a curve through both segments
+//!   of several ambiguous faces, e.g. three diagonal corners with every face joined) it is
+//!   fanned from an extra vertex at the mean of its crossings. Every mesh edge then has exactly
+//!   two triangles, every vertex one fan, and all triangles agree in orientation. The case table
+//!   is generated from this rule at first use (see `table`).
 //! - **Slivers.** When the surface passes close to a node, the crossings on the node's edges
 //!   are close together and form tiny triangles and needles. Edges shorter than
 //!   [`ExtractOptions::collapse_below`] voxels are collapsed (the vertex nearer a grid node is
 //!   merged into the other, which keeps its position on the interpolated surface), each collapse
 //!   only when the link condition holds (Dey, Edelsbrunner, Guha, Nekhayev 1999: the result is
-//!   still a closed 2-manifold of the same topology) and no remaining triangle flips or loses
-//!   its area (see `collapse`).
+//!   still a closed 2-manifold of the same topology), no remaining triangle flips or loses its
+//!   area, the smallest angle around does not get worse, and no grid node changes side (see
+//!   `collapse`). So the surface still separates the inside nodes from the outside ones, exactly
+//!   as before the collapses.
 //!
-//! The grid is processed in slabs of z-layers in parallel (rayon); the output does not depend on
-//! the number of threads.
+//! The grid is processed in slabs of z-layers in parallel (rayon), the collapses too (those
+//! around nodes on the layers two slabs share run once more on the joined mesh); the slabs are
+//! fixed, so the output does not depend on the number of threads.
 
 mod collapse;
 mod table;
