@@ -479,6 +479,52 @@ def close_holes(V: np.ndarray, F: np.ndarray, max_hole_size: int | None = None) 
     return out
 
 
+def read_grid(path: str | os.PathLike, dims: tuple[int, int, int]) -> np.ndarray:
+    """Read a grid of raw little-endian float64 values, x fastest (nx·ny·nz values)."""
+    path = Path(path)
+    nx, ny, nz = dims
+    if min(dims) < 1:
+        raise OracleError(f"grid dimensions must be positive, got {dims}")
+    try:
+        data = path.read_bytes()
+    except OSError as e:
+        raise OracleError(f"{path}: {e.strerror or e}") from None
+    if len(data) != 8 * nx * ny * nz:
+        raise OracleError(
+            f"{path}: size {len(data)} is not 8·{nx}·{ny}·{nz} (float64 grid, x fastest)"
+        )
+    return np.frombuffer(data, dtype="<f8").astype(np.float64)
+
+
+def marching_cubes(
+    S: np.ndarray, dims: tuple[int, int, int], origin: tuple[float, float, float], voxel: float
+) -> dict:
+    """libigl `igl.marching_cubes` of the grid values S (x fastest) at isovalue 0.
+
+    Node (i, j, k) sits at origin + voxel·(i, j, k). The node positions (GV) are built before
+    the clock starts; "seconds" times the libigl call alone. Result keys "V", "F" hold the mesh
+    as libigl returns it (its classic Lorensen–Cline table: ambiguous cases are not resolved
+    consistently, so the mesh can have holes; nothing is welded or repaired here).
+    """
+    import igl
+
+    nx, ny, nz = dims
+    if not (math.isfinite(voxel) and voxel > 0):
+        raise OracleError(f"voxel size must be positive and finite, got {voxel}")
+    S = np.ascontiguousarray(S, np.float64).ravel()
+    if S.size != nx * ny * nz:
+        raise OracleError(f"grid has {S.size} values, expected {nx}·{ny}·{nz}")
+    k, j, i = np.meshgrid(np.arange(nz), np.arange(ny), np.arange(nx), indexing="ij")
+    GV = np.stack([i.ravel(), j.ravel(), k.ravel()], axis=1).astype(np.float64)
+    GV = np.ascontiguousarray(GV * voxel + np.asarray(origin, np.float64))
+    t0 = time.perf_counter()
+    V, F = igl.marching_cubes(S, GV, nx, ny, nz, 0.0)[:2]
+    seconds = time.perf_counter() - t0
+    V = np.asarray(V, np.float64).reshape(-1, 3)
+    F = np.asarray(F, np.int64).reshape(-1, 3)
+    return {"vertices": int(len(V)), "faces": int(len(F)), "seconds": seconds, "V": V, "F": F}
+
+
 def info(V: np.ndarray, F: np.ndarray) -> dict:
     """The keys of `vesselmsr info --json`, computed independently.
 
@@ -579,6 +625,13 @@ def _run(args: argparse.Namespace) -> dict:
         res = close_holes(*load_mesh(args.mesh), max_hole_size=args.max_hole_size)
         save_mesh(args.out, res["V"], res["F"])
         return res
+    if cmd == "marching_cubes":
+        dims = (args.nx, args.ny, args.nz)
+        res = marching_cubes(
+            read_grid(args.grid, dims), dims, (args.ox, args.oy, args.oz), args.voxel
+        )
+        save_mesh(args.out, res["V"], res["F"])
+        return res
     raise OracleError(f"unknown command {cmd!r}")
 
 
@@ -621,6 +674,14 @@ def _parser() -> argparse.ArgumentParser:
         default=None,
         help="largest hole closed, in boundary edges (default: any size)",
     )
+    s = sub.add_parser("marching_cubes", help="libigl marching cubes of a grid at isovalue 0")
+    s.add_argument("grid", help="nx·ny·nz raw little-endian float64 values, x fastest")
+    for name in ("nx", "ny", "nz"):
+        s.add_argument(name, type=int)
+    for name in ("ox", "oy", "oz"):
+        s.add_argument(name, type=float, help="world position of node (0, 0, 0)")
+    s.add_argument("voxel", type=float, help="node spacing, world units")
+    s.add_argument("out", help="output mesh (.stl, .obj or .ply)")
     return p
 
 

@@ -416,6 +416,27 @@ def test_cli_round_trip(tmp_path, sphere):
     run_cli("nonsense", ok=False)
 
 
+def test_marching_cubes_sphere(tmp_path):
+    """libigl's marching cubes of a sphere's signed distance: closed, outward, near 4/3·π r³."""
+    n, h, o = 41, 0.065, -1.3
+    k, j, i = np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij")
+    P = np.stack([i, j, k], -1).reshape(-1, 3) * h + o
+    S = np.linalg.norm(P, axis=1) - 1.0
+    res = oracle.marching_cubes(S, (n, n, n), (o, o, o), h)
+    chk = oracle.check(res["V"], res["F"])
+    assert chk["manifold_status"] == "NoError"
+    assert chk["manifold_volume"] == pytest.approx(4 / 3 * math.pi, rel=5e-3)
+    S.astype("<f8").tofile(tmp_path / "g.f64")
+    out = run_cli("marching_cubes", tmp_path / "g.f64", n, n, n, o, o, o, h, tmp_path / "mc.ply")
+    assert (out["vertices"], out["faces"]) == (len(res["V"]), len(res["F"]))
+    V, F = oracle.load_mesh(tmp_path / "mc.ply")
+    np.testing.assert_array_equal(F, res["F"])
+    # Errors: wrong size, bad voxel.
+    grid, bad = tmp_path / "g.f64", tmp_path / "x.ply"
+    run_cli("marching_cubes", grid, n, n, n + 1, o, o, o, h, bad, ok=False)
+    run_cli("marching_cubes", grid, n, n, n, o, o, o, 0, bad, ok=False)
+
+
 # --------------------------------------------------------------------------------------------
 # Real meshes (../shared/data/real, figures from its SOURCES.md)
 # --------------------------------------------------------------------------------------------
