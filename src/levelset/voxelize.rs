@@ -24,6 +24,7 @@ mod sign;
 
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
+use std::collections::HashMap;
 use std::time::Instant;
 
 use crate::bvh::{WindingNumber, WindingOptions};
@@ -75,6 +76,9 @@ impl Default for VoxelizeOptions {
 pub struct VoxelizeReport {
     /// Grid nodes.
     pub nodes: usize,
+    /// Whether the triangles form a closed surface (every edge used as often in each direction;
+    /// orientation may be inward). Only then is the winding number constant off the triangles.
+    pub closed: bool,
     /// Nodes within the band (exact distance ≤ band·h).
     pub band_nodes: usize,
     /// Nodes inside (φ < 0, or φ = −0 on the surface).
@@ -102,6 +106,33 @@ impl VoxelizeReport {
     pub fn winding_evaluations(&self) -> usize {
         self.seed_evaluations + self.pocket_evaluations + self.front_evaluations
     }
+}
+
+/// Whether the valid triangles (as the hierarchy indexes them: indices in range, finite corners)
+/// form a closed 2-cycle: for every edge, as many triangles run along it in one direction as in
+/// the other. A consistently oriented closed manifold does (outward or inward), and so does a
+/// closed surface with several components, touching components or overlapping closed shells.
+fn is_closed(mesh: &TriMesh) -> bool {
+    let nv = mesh.vertices.len();
+    let mut balance: HashMap<(u32, u32), i32> = HashMap::with_capacity(3 * mesh.faces.len() / 2);
+    for face in &mesh.faces {
+        if face.iter().any(|&i| i as usize >= nv)
+            || face
+                .iter()
+                .any(|&i| mesh.vertices[i as usize].iter().any(|c| !c.is_finite()))
+        {
+            continue;
+        }
+        for e in 0..3 {
+            let (a, b) = (face[e], face[(e + 1) % 3]);
+            match a.cmp(&b) {
+                std::cmp::Ordering::Less => *balance.entry((a, b)).or_default() += 1,
+                std::cmp::Ordering::Greater => *balance.entry((b, a)).or_default() -= 1,
+                std::cmp::Ordering::Equal => {}
+            }
+        }
+    }
+    balance.values().all(|&c| c == 0)
 }
 
 /// Node state bits shared by the submodules.
@@ -212,7 +243,11 @@ pub fn voxelize_with_report(
     report.seconds_band = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let counts = sign::assign_signs(&wn, &layout, &dist, &mut state, opts.seed_stride);
+    report.closed = is_closed(mesh);
+    // On a closed surface w is an integer off the triangles, so the flood alone is exact; on an
+    // open one, every node within one voxel of a triangle is evaluated too (see `sign`).
+    let near = if report.closed { 0.0 } else { h };
+    let counts = sign::assign_signs(&wn, &layout, &dist, &mut state, opts.seed_stride, near);
     report.seed_evaluations = counts.seeds;
     report.pocket_evaluations = counts.pockets;
     report.front_evaluations = counts.fronts;

@@ -10,6 +10,12 @@
 //!   w. Every edge touching a node outside the band (d > band ≥ h) is such an edge.
 //! * Seeds: the nodes of a coarse lattice (every `stride`-th node along each axis) and the band
 //!   nodes with no crossing-free edge at all (those closest to the surface, about d < 0.2 h).
+//!   For an open surface, also every node within one voxel of it (`near`): w is not constant
+//!   along the surface there (next to an open end, a thin sheet of nodes hugging the inner wall
+//!   can be inside while the lumen's centre at the same level is not yet), and nodes that close
+//!   are joined along the surface by no crossing-free edge that could carry the news. Every
+//!   node left unevaluated is then farther than h from the surface, so all its edges are
+//!   crossing-free.
 //! * A breadth-first flood from the seeds over crossing-free edges gives every other node the
 //!   sign of its nearest seed; a node the flood never reaches (a pocket without a seed) is
 //!   evaluated and flooded from in turn.
@@ -18,8 +24,9 @@
 //!   signs, each unevaluated end is evaluated; a node whose sign changes makes its disagreeing
 //!   unevaluated neighbours the next front; repeat until no front is left. At the end every
 //!   crossing-free edge with a sign change has both ends evaluated, so the sign boundary sits
-//!   where w says it is; only a region of one sign lying entirely between seeds (thinner than the
-//!   stride and touching no seed) could be missed.
+//!   where w says it is. Only a region of one sign lying entirely among unevaluated nodes could
+//!   be missed; w being harmonic off the surface, such a region reaches the surface or the grid's
+//!   border, so it would have to slip between the evaluated nodes there.
 
 use rayon::prelude::*;
 use std::collections::VecDeque;
@@ -68,13 +75,15 @@ fn for_neighbours(layout: &Layout, idx: usize, mut f: impl FnMut(usize)) {
 }
 
 /// Sign bits of every node of `state` from `dist` (distance in the band, +∞ outside). `stride`
-/// ≥ 1 is the coarse-lattice spacing in voxels.
+/// ≥ 1 is the coarse-lattice spacing in voxels; every node within `near` (world units) of the
+/// mesh is a seed too.
 pub(super) fn assign_signs(
     wn: &WindingNumber,
     layout: &Layout,
     dist: &[f32],
     state: &mut [u8],
     stride: usize,
+    near: f64,
 ) -> SignCounts {
     let [nx, ny, _] = layout.dims;
     // Crossing-free test with a margin for the f32 rounding of the distances.
@@ -97,11 +106,12 @@ pub(super) fn assign_signs(
                 for i in 0..nx {
                     let idx = base + j * nx + i;
                     let lattice = i % stride == 0 && j % stride == 0 && k % stride == 0;
-                    let isolated = dist[idx].is_finite() && {
-                        let mut any = false;
-                        for_neighbours(layout, idx, |b| any |= free(idx, b));
-                        !any
-                    };
+                    let isolated = dist[idx].is_finite()
+                        && (dist[idx] as f64 <= near || {
+                            let mut any = false;
+                            for_neighbours(layout, idx, |b| any |= free(idx, b));
+                            !any
+                        });
                     if lattice || isolated {
                         out.push(idx as u32);
                     }
