@@ -9,7 +9,7 @@ use common::*;
 use nalgebra::{Point3, Vector3};
 use rand::seq::SliceRandom;
 use rand::RngExt;
-use vesselmsr::bvh::brute::closest_point_brute;
+use vesselmsr::bvh::brute::{closest_point_brute, winding_number_exact};
 use vesselmsr::bvh::{WindingNumber, WindingOptions};
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::levelset::voxelize::{
@@ -228,8 +228,16 @@ fn torus_signs_everywhere_match_analytic() {
     }
 }
 
-/// Signs of every node against |w| ≥ ½ evaluated at every node with the same evaluator: the
-/// flood and the fronts must reproduce it exactly.
+/// Whether `p` is inside by the exact winding number (every triangle's solid angle), and how far
+/// |w| is from ½.
+fn exact_inside(mesh: &TriMesh, p: &Point3<f64>) -> (bool, f64) {
+    let w = winding_number_exact(mesh, p).abs();
+    (w >= 0.5, (w - 0.5).abs())
+}
+
+/// Signs of every node against |w| ≥ ½ evaluated at every node (fast winding number, and the
+/// exact one where the fast one is within 0.02 of ½): the flood and the fronts must reproduce it,
+/// but for nodes where the exact |w| is within 1e-4 of ½.
 fn assert_signs_match_winding_everywhere(
     name: &str,
     mesh: &TriMesh,
@@ -240,11 +248,25 @@ fn assert_signs_match_winding_everywhere(
     let wn = WindingNumber::new(mesh, opts.winding);
     let points: Vec<Point3<f64>> = nodes(&grid).map(|(_, p)| p).collect();
     let w = wn.winding_numbers(&points);
-    let wrong: Vec<usize> = (0..points.len())
-        .filter(|&i| (w[i].abs() >= 0.5) != (grid.data()[i] < 0.0))
-        .collect();
+    let (mut wrong, mut ties, mut exact) = (Vec::new(), 0, 0);
+    for (i, p) in points.iter().enumerate() {
+        let ours = grid.data()[i] < 0.0;
+        let (inside, margin) = if (w[i].abs() - 0.5).abs() < 0.02 {
+            exact += 1;
+            exact_inside(mesh, p)
+        } else {
+            (w[i].abs() >= 0.5, 1.0)
+        };
+        if ours != inside {
+            if margin < 1e-4 {
+                ties += 1;
+            } else {
+                wrong.push(i);
+            }
+        }
+    }
     println!(
-        "{name}: {} nodes, {} inside, signs differing from |w| ≥ ½ at every node: {} ({} winding numbers: {} seeds, {} pockets, {} fronts in {} rounds)",
+        "{name}: {} nodes, {} inside, signs differing from |w| ≥ ½ at every node: {} (and {ties} within 1e-4 of ½; {exact} nodes needed the exact w); {} winding numbers: {} seeds, {} pockets, {} fronts in {} rounds, {} refined",
         rep.nodes,
         rep.inside_nodes,
         wrong.len(),
@@ -252,12 +274,14 @@ fn assert_signs_match_winding_everywhere(
         rep.seed_evaluations,
         rep.pocket_evaluations,
         rep.front_evaluations,
-        rep.front_rounds
+        rep.front_rounds,
+        rep.refined_evaluations
     );
     for &i in wrong.iter().take(5) {
         println!("  {}: w = {}, φ = {}", points[i], w[i], grid.data()[i]);
     }
     assert!(wrong.is_empty(), "{name}: {} signs differ", wrong.len());
+    assert!(ties < 10, "{name}: {ties} ties");
     rep
 }
 
@@ -408,12 +432,30 @@ fn real_meshes_agree_with_libigl() {
             })
             .collect();
         let (igl, _) = oracle.query("signed_distance", &dir.join(&file), &points, 1);
+        // Sign disagreements must be where |w| is so close to ½ (across open ends) that libigl's
+        // fast winding number cannot tell; there the exact w must side with us.
+        let check_sign = |ours: bool, theirs: bool, p: &Point3<f64>, what: &str| -> usize {
+            if ours == theirs {
+                return 0;
+            }
+            let (inside, margin) = exact_inside(&mesh, p);
+            println!("  {file}: {what} sign differs at {p}: ours inside {ours}, libigl {theirs}, exact |w| − ½ within {margin:.1e}");
+            assert!(
+                margin < 5e-3,
+                "{file}: {what} sign disagreement at {p}, exact |w| {margin} from ½"
+            );
+            assert!(
+                inside == ours || margin < 1e-4,
+                "{file}: exact w sides with libigl at {p}"
+            );
+            1
+        };
         let (mut worst, mut signs) = (0.0f64, 0);
-        for (&idx, &s) in picked.iter().zip(&igl) {
+        for ((&idx, &s), p) in picked.iter().zip(&igl).zip(&points) {
             let phi = grid.data()[idx] as f64;
             worst = worst.max((phi.abs() - s.abs()).abs());
-            if (phi < 0.0) != (s < 0.0) && phi != 0.0 {
-                signs += 1;
+            if phi != 0.0 {
+                signs += check_sign(phi < 0.0, s < 0.0, p, "band");
             }
         }
         // Signs far from the surface against libigl's fast winding number.
@@ -433,11 +475,10 @@ fn real_meshes_agree_with_libigl() {
             })
             .collect();
         let (w, _) = oracle.query("winding", &dir.join(&file), &far_points, 1);
-        let far_signs = far
-            .iter()
-            .zip(&w)
-            .filter(|(&idx, &w)| (w.abs() >= 0.5) != (grid.data()[idx] < 0.0))
-            .count();
+        let mut far_signs = 0;
+        for ((&idx, &w), p) in far.iter().zip(&w).zip(&far_points) {
+            far_signs += check_sign(grid.data()[idx] < 0.0, w.abs() >= 0.5, p, "far");
+        }
         println!(
             "{file}: grid {:?}, h = {h:.5}, {band_count} band nodes, voxelize {seconds:.2} s; 10,000 band nodes: max ||φ| − |libigl|| = {:.2e} h, sign disagreements {signs}; 3000 far nodes: sign disagreements with libigl's winding number {far_signs}; {} inside nodes",
             layout.0,
@@ -445,8 +486,6 @@ fn real_meshes_agree_with_libigl() {
             rep.inside_nodes
         );
         assert!(worst <= 1e-4 * h, "{file}: {worst}");
-        assert_eq!(signs, 0, "{file}: band sign disagreements");
-        assert_eq!(far_signs, 0, "{file}: far sign disagreements");
     }
 }
 

@@ -91,6 +91,9 @@ pub struct VoxelizeReport {
     pub front_evaluations: usize,
     /// Rounds of front evaluation.
     pub front_rounds: usize,
+    /// Evaluations (among the above) whose fast value came within 0.02 of ±½ and were repeated
+    /// with β = 8.
+    pub refined_evaluations: usize,
     /// Seconds building the hierarchy and the winding-number expansions.
     pub seconds_hierarchy: f64,
     /// Seconds for the band distances.
@@ -252,6 +255,7 @@ pub fn voxelize_with_report(
     report.pocket_evaluations = counts.pockets;
     report.front_evaluations = counts.fronts;
     report.front_rounds = counts.front_rounds;
+    report.refined_evaluations = counts.refined;
     report.inside_nodes = state.par_iter().filter(|&&s| s & NEG != 0).count();
     report.seconds_sign = t.elapsed().as_secs_f64();
     if report.inside_nodes == 0 {
