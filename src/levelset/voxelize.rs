@@ -1,9 +1,10 @@
 //! Voxelization: a triangle mesh to a signed distance grid φ, negative inside (the level-set
 //! function the multiscale representation of Dong, Chien, Shen and Osher evolves).
 //!
-//! * **Magnitude**: the exact Euclidean distance to the triangles (f64 closest-point queries on
-//!   the mesh's BVH, stored as f32) at every node within a narrow band of
-//!   [`VoxelizeOptions::band`] voxels of the surface (see `voxelize/band.rs`). Outside the band
+//! * **Magnitude**: the exact Euclidean distance to the triangles (computed in f64 by the BVH's
+//!   point–triangle routine, stored as f32) at every node within a narrow band of
+//!   [`VoxelizeOptions::band`] voxels of the surface; the triangles are scattered onto the grid
+//!   rather than each node querying the hierarchy (see `voxelize/band.rs`). Outside the band
 //!   the value is a placeholder ±band·h ([`FarFill::Clamp`], a lower bound of the true distance:
 //!   φ is then the signed distance clamped to the band, which the redistancer turns into a full
 //!   distance), or the exact distance at every node ([`FarFill::Exact`], slower).
@@ -17,7 +18,8 @@
 //!   `voxelize/sign.rs`), so the sign is known at every node, in and out of the band.
 //!
 //! Work is parallel (rayon) over z-layers of the grid, except the sign flood, which is a plain
-//! breadth-first traversal.
+//! breadth-first traversal. Memory: the f32 grid and one byte of state per node, plus the
+//! flood's queue (its frontier) and the lists of evaluated nodes.
 
 mod band;
 mod sign;
@@ -209,7 +211,8 @@ pub fn voxelize_with_report(
         )));
     }
     // Validates dims and voxel size.
-    let mut grid = Grid3::new(dims, transform, 0.0)?;
+    // The grid holds the unsigned distances (+∞ outside the band) until the signs are applied.
+    let mut grid = Grid3::new(dims, transform, f32::INFINITY)?;
     let n = grid.data().len();
     if n > u32::MAX as usize {
         return Err(Error::Geometry(format!(
@@ -240,9 +243,8 @@ pub fn voxelize_with_report(
 
     let t = Instant::now();
     let bw = opts.band * h;
-    let mut dist = vec![f32::INFINITY; n];
     let mut state = vec![0u8; n];
-    report.band_nodes = band::band_distances(wn.bvh(), &layout, bw, &mut dist, &mut state);
+    report.band_nodes = band::band_distances(wn.bvh(), &layout, bw, grid.data_mut(), &mut state);
     report.seconds_band = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
@@ -250,7 +252,14 @@ pub fn voxelize_with_report(
     // On a closed surface w is an integer off the triangles, so the flood alone is exact; on an
     // open one, every node within one voxel of a triangle is evaluated too (see `sign`).
     let near = if report.closed { 0.0 } else { h };
-    let counts = sign::assign_signs(&wn, &layout, &dist, &mut state, opts.seed_stride, near);
+    let counts = sign::assign_signs(
+        &wn,
+        &layout,
+        grid.data(),
+        &mut state,
+        opts.seed_stride,
+        near,
+    );
     report.seed_evaluations = counts.seeds;
     report.pocket_evaluations = counts.pockets;
     report.front_evaluations = counts.fronts;
@@ -269,14 +278,14 @@ pub fn voxelize_with_report(
 
     let t = Instant::now();
     if opts.far == FarFill::Exact {
-        band::far_distances(mesh, wn.bvh(), &layout, &mut dist);
+        band::far_distances(mesh, wn.bvh(), &layout, grid.data_mut());
     }
     let clamp = bw as f32;
     grid.data_mut()
         .par_iter_mut()
-        .zip(dist.par_iter().zip(state.par_iter()))
-        .for_each(|(phi, (&d, &s))| {
-            let m = if d.is_finite() { d } else { clamp };
+        .zip(state.par_iter())
+        .for_each(|(phi, &s)| {
+            let m = if phi.is_finite() { *phi } else { clamp };
             *phi = if s & NEG != 0 { -m } else { m };
         });
     report.seconds_far = t.elapsed().as_secs_f64();

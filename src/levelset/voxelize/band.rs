@@ -28,9 +28,9 @@ struct Footprint {
     /// Inclusive node ranges along x and y.
     i: [usize; 2],
     j: [usize; 2],
-    /// Unit normal and plane offset (n·x = c); `None` for a triangle without area, which then
-    /// marks its whole grown box.
-    plane: Option<(Vector3<f64>, f64)>,
+    /// Unit normal, plane offset (n·x = c) and half-width of the slab kept about the plane;
+    /// `None` for a triangle without area or a sliver, which then covers its whole grown box.
+    plane: Option<(Vector3<f64>, f64, f64)>,
 }
 
 /// Inclusive node range covering world coordinates [lo, hi] along an axis of `n` nodes, or
@@ -39,7 +39,8 @@ struct Footprint {
 fn node_range(lo: f64, hi: f64, origin: f64, h: f64, n: usize) -> Option<[usize; 2]> {
     let a = ((lo - origin) / h - 1e-6).ceil();
     let b = ((hi - origin) / h + 1e-6).floor();
-    if !(a <= b) || b < 0.0 || a > (n - 1) as f64 {
+    // NaN bounds fail `a <= b` and give None.
+    if a.partial_cmp(&b).is_none_or(|o| o.is_gt()) || b < 0.0 || a > (n - 1) as f64 {
         return None;
     }
     Some([a.max(0.0) as usize, b.min((n - 1) as f64) as usize])
@@ -73,11 +74,18 @@ pub(super) fn band_distances(
         ) else {
             continue;
         };
+        // The plane cut is used only where the normal is accurate (not on slivers, whose whole
+        // grown box is kept), with a slab widened by a millionth of band + longest edge.
         let n = (b - a).cross(&(c - a));
         let len = n.norm();
-        let plane = (len > 0.0 && len.is_finite()).then(|| {
+        let long2 = (b - a)
+            .norm_squared()
+            .max((c - b).norm_squared())
+            .max((a - c).norm_squared());
+        let plane = (len.is_finite() && len > 1e-6 * long2).then(|| {
             let n = n / len;
-            (n, n.dot(&a.coords))
+            let slab = bw + 1e-6 * (bw + long2.sqrt());
+            (n, n.dot(&a.coords), slab)
         });
         let id = footprints.len() as u32;
         footprints.push(Footprint { slot, i, j, plane });
@@ -100,7 +108,7 @@ pub(super) fn band_distances(
                     let [a, b, c] = bvh.slot_triangle(f.slot);
                     for jj in f.j[0]..=f.j[1] {
                         let y = o[1] + jj as f64 * h;
-                        let Some([i0, i1]) = f.row(y, z, bw, o[0], h, nx) else {
+                        let Some([i0, i1]) = f.row(y, z, o[0], h, nx) else {
                             continue;
                         };
                         let row = jj * nx;
@@ -133,18 +141,18 @@ pub(super) fn band_distances(
 
 impl Footprint {
     /// Inclusive range of x nodes of the row (y, z) in the footprint: the grown box's range cut
-    /// to the slab |n·x − c| ≤ bw about the plane; `None` when empty.
+    /// to the slab about the plane; `None` when empty.
     #[inline]
-    fn row(&self, y: f64, z: f64, bw: f64, ox: f64, h: f64, nx: usize) -> Option<[usize; 2]> {
-        let Some((n, c)) = self.plane else {
+    fn row(&self, y: f64, z: f64, ox: f64, h: f64, nx: usize) -> Option<[usize; 2]> {
+        let Some((n, c, slab)) = self.plane else {
             return Some(self.i);
         };
         let s = n.y * y + n.z * z - c;
         if n.x.abs() < 1e-12 {
-            return (s.abs() <= bw * (1.0 + 1e-9)).then_some(self.i);
+            return (s.abs() <= slab).then_some(self.i);
         }
-        let xa = (-bw - s) / n.x;
-        let xb = (bw - s) / n.x;
+        let xa = (-slab - s) / n.x;
+        let xb = (slab - s) / n.x;
         let [a, b] = node_range(xa.min(xb), xa.max(xb), ox, h, nx)?;
         (a <= self.i[1] && b >= self.i[0]).then(|| [a.max(self.i[0]), b.min(self.i[1])])
     }
@@ -161,9 +169,9 @@ pub(super) fn far_distances(mesh: &TriMesh, bvh: &MeshBvh, layout: &Layout, dist
         let (jj, k) = (row % ny, row / ny);
         let mut prev: Option<f64> = None;
         let mut hint: Option<u32> = None;
-        for i in 0..nx {
-            if d[i].is_finite() {
-                prev = Some(d[i] as f64);
+        for (i, di) in d.iter_mut().enumerate() {
+            if di.is_finite() {
+                prev = Some(*di as f64);
                 hint = None;
                 continue;
             }
@@ -180,7 +188,7 @@ pub(super) fn far_distances(mesh: &TriMesh, bvh: &MeshBvh, layout: &Layout, dist
             let cp = bound
                 .and_then(|r| bvh.closest_point_within(&p, r))
                 .unwrap_or_else(|| bvh.closest_point(&p));
-            d[i] = cp.distance as f32;
+            *di = cp.distance as f32;
             prev = Some(cp.distance);
             hint = Some(cp.face);
         }
