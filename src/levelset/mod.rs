@@ -1,4 +1,7 @@
-//! The level-set core: the function φ (negative inside) on a [`crate::grid::Grid3`] and the
-//! bridges between it and triangle meshes.
+//! The level-set core: the function φ (negative inside) on a [`crate::grid::Grid3`], as the
+//! level-set multiscale representation of Dong, Chien, Shen and Osher works on it, and the
+//! bridges between φ and triangle meshes: `voxelize` (mesh → φ), `redistance` (fast sweeping
+//! back to a signed distance function) and `marching_cubes` (φ → closed mesh).
 
 pub mod marching_cubes;
+pub mod voxelize;
