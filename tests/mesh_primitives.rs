@@ -72,3 +72,44 @@ fn box_torus_and_tube() {
         .sum();
     assert!(side > 0.0, "tube faces point inward");
 }
+
+#[test]
+fn a_cavity_faces_into_its_hole() {
+    use vesselmsr::mesh::orient::orient_outward;
+    let c = Point3::new(1.0, 2.0, 3.0);
+    let mut hollow = icosphere(3, 2.0, c);
+    let mut cavity = icosphere(3, 1.0, c + nalgebra::Vector3::new(0.3, 0.0, 0.0));
+    cavity.flip_faces();
+    hollow.append(&cavity);
+    let info = mesh_info(&hollow);
+    assert_eq!(info.components, 2);
+    assert_eq!(
+        info.orientation,
+        Orientation::Outward,
+        "a correctly wound hollow ball"
+    );
+    let shell = 4.0 / 3.0 * PI * (8.0 - 1.0);
+    assert!(
+        (info.volume.unwrap() - shell).abs() / shell < 0.02,
+        "volume {:?}",
+        info.volume
+    );
+    assert_eq!(orient_outward(&mut hollow.clone()), 0);
+
+    // The cavity's shell turned the wrong way: inconsistent, and orient_outward flips only it.
+    let mut wrong = hollow.clone();
+    let n = wrong.num_faces();
+    for f in &mut wrong.faces[n / 2..] {
+        f.swap(1, 2);
+    }
+    assert_eq!(mesh_info(&wrong).orientation, Orientation::Inconsistent);
+    assert_eq!(orient_outward(&mut wrong), 1);
+    assert_eq!(wrong, hollow);
+
+    // Everything inward.
+    let mut inward = hollow.clone();
+    inward.flip_faces();
+    assert_eq!(mesh_info(&inward).orientation, Orientation::Inward);
+    assert_eq!(orient_outward(&mut inward), 2);
+    assert_eq!(inward, hollow);
+}

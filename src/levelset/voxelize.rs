@@ -54,7 +54,8 @@ pub struct VoxelizeOptions {
     pub band: f64,
     /// Values outside the band (default [`FarFill::Clamp`]).
     pub far: FarFill,
-    /// Fast winding number accuracy (default β = 2, as libigl's `fast_winding_number`).
+    /// Fast winding number accuracy (default: second order at β = 2, as libigl's
+    /// `fast_winding_number`; only the sign matters here, and values near ½ are re-evaluated).
     pub winding: WindingOptions,
     /// Spacing of the coarse lattice of nodes where the winding number is always evaluated,
     /// **in voxels** (≥ 1; default 8). Smaller costs more evaluations and shortens the fronts
@@ -67,7 +68,10 @@ impl Default for VoxelizeOptions {
         VoxelizeOptions {
             band: 3.0,
             far: FarFill::Clamp,
-            winding: WindingOptions::default(),
+            winding: WindingOptions {
+                beta: 2.0,
+                order: 2,
+            },
             seed_stride: 8,
         }
     }

@@ -104,6 +104,60 @@ pub fn component_signed_volumes(mesh: &TriMesh, n: usize, labels: &[u32]) -> Vec
     vol.iter().map(|v| v / 6.0).collect()
 }
 
+/// How many other components enclose each component (its nesting depth): a cavity inside a
+/// solid has depth 1, an island inside that cavity depth 2. A component counts as enclosed by
+/// another when the other's winding number (exact sum of solid angles) at one of its vertices is
+/// at least ½ in magnitude. A correctly oriented closed mesh has positive signed volume on
+/// components of even depth and negative on odd ones (cavities face into the hole).
+pub fn component_nesting_depths(mesh: &TriMesh, n: usize, labels: &[u32]) -> Vec<usize> {
+    if n <= 1 {
+        return vec![0; n];
+    }
+    let mut faces_of: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (f, &l) in labels.iter().enumerate() {
+        faces_of[l as usize].push(f);
+    }
+    let boxes: Vec<(Point3<f64>, Point3<f64>)> = faces_of
+        .iter()
+        .map(|faces| {
+            let mut lo = Point3::from([f64::INFINITY; 3]);
+            let mut hi = Point3::from([f64::NEG_INFINITY; 3]);
+            for &f in faces {
+                for p in mesh.triangle(f) {
+                    lo = lo.inf(&p);
+                    hi = hi.sup(&p);
+                }
+            }
+            (lo, hi)
+        })
+        .collect();
+    let inside_box = |p: &Point3<f64>, (lo, hi): &(Point3<f64>, Point3<f64>)| {
+        (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k])
+    };
+    (0..n)
+        .map(|c| {
+            let Some(&f) = faces_of[c].first() else {
+                return 0;
+            };
+            let p = mesh.vertices[mesh.faces[f][0] as usize];
+            (0..n)
+                .filter(|&d| d != c && inside_box(&p, &boxes[d]))
+                .filter(|&d| {
+                    let w: f64 = faces_of[d]
+                        .iter()
+                        .map(|&g| {
+                            let [a, b, c] = mesh.triangle(g);
+                            crate::bvh::solid_angle(&p, &a, &b, &c)
+                        })
+                        .sum::<f64>()
+                        / (4.0 * std::f64::consts::PI);
+                    w.abs() >= 0.5
+                })
+                .count()
+        })
+        .collect()
+}
+
 /// Axis-aligned bounding box (min, max) of the vertices used by faces (of all vertices when there
 /// are no faces). An empty mesh gives two origins.
 pub fn bounding_box(mesh: &TriMesh) -> (Point3<f64>, Point3<f64>) {

@@ -7,7 +7,7 @@
 //! enclosed volume given by the divergence theorem tells whether a consistently wound component
 //! faces outward, and the component is flipped when it is negative.
 
-use super::measures::component_signed_volumes;
+use super::measures::{component_nesting_depths, component_signed_volumes};
 use super::topology::{connected_components, EdgeMap};
 use super::TriMesh;
 use std::collections::VecDeque;
@@ -99,7 +99,13 @@ pub fn orient_consistently(mesh: &mut TriMesh) -> usize {
 pub fn orient_outward(mesh: &mut TriMesh) -> usize {
     let (n, labels) = connected_components(mesh);
     let vols = component_signed_volumes(mesh, n, &labels);
-    let flip: Vec<bool> = vols.iter().map(|&v| v < 0.0).collect();
+    // A shell nested inside another (a cavity) faces into its cavity: negative volume.
+    let depths = component_nesting_depths(mesh, n, &labels);
+    let flip: Vec<bool> = vols
+        .iter()
+        .zip(&depths)
+        .map(|(&v, &d)| (v < 0.0) == (d % 2 == 0))
+        .collect();
     for (face, &l) in mesh.faces.iter_mut().zip(&labels) {
         if flip[l as usize] {
             face.swap(1, 2);

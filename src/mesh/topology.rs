@@ -425,7 +425,8 @@ impl fmt::Display for Orientation {
 /// The orientation of the mesh: `Inconsistent` if some edge with two faces is traversed the same
 /// way by both; else `Open` if there are boundary edges (or no faces); else, per connected
 /// component, the sign of its enclosed signed volume: `Outward` if every component's is ≥ 0,
-/// `Inward` if every one is < 0, and `Inconsistent` if the components disagree.
+/// `Inward` if every one is < 0, and `Inconsistent` if the components disagree — where a
+/// component nested inside another (a cavity) counts as outward when it faces into the cavity.
 pub fn orientation(mesh: &TriMesh) -> Orientation {
     let map = EdgeMap::new(mesh);
     let (n, labels) = connected_components(mesh);
@@ -446,10 +447,15 @@ pub(crate) fn orientation_of(
         return Orientation::Open;
     }
     let vols = super::measures::component_signed_volumes(map.mesh(), n_components, labels);
-    let inward = vols.iter().filter(|&&v| v < 0.0).count();
-    if inward == 0 {
+    if n_components == 1 {
+        return if vols[0] >= 0.0 { Orientation::Outward } else { Orientation::Inward };
+    }
+    // Several shells: a cavity's shell rightly faces into the cavity (negative volume).
+    let depths = super::measures::component_nesting_depths(map.mesh(), n_components, labels);
+    let outward_shell = |c: usize| (vols[c] >= 0.0) == (depths[c] % 2 == 0);
+    if (0..n_components).all(outward_shell) {
         Orientation::Outward
-    } else if inward == vols.len() {
+    } else if (0..n_components).all(|c| !outward_shell(c)) {
         Orientation::Inward
     } else {
         Orientation::Inconsistent

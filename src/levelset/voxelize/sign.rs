@@ -114,7 +114,13 @@ pub(super) fn assign_signs(
         }
         refined.fetch_add(1, Ordering::Relaxed);
         let precise = precise.get_or_init(|| {
-            WindingNumber::from_bvh(wn.bvh().clone(), WindingOptions { beta: REFINE_BETA })
+            WindingNumber::from_bvh(
+                wn.bvh().clone(),
+                WindingOptions {
+                    beta: REFINE_BETA,
+                    order: 2,
+                },
+            )
         });
         precise.winding_number(&p).abs() >= 0.5
     };
