@@ -4,4 +4,5 @@
 //! back to a signed distance function) and `marching_cubes` (φ → closed mesh).
 
 pub mod marching_cubes;
+pub mod project;
 pub mod voxelize;

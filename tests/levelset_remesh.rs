@@ -1,0 +1,250 @@
+//! Mesh → φ → mesh (marching cubes, vertices projected onto the input) on the real meshes at the
+//! default voxel size h and at 2h and h/2: the result is watertight (manifold3d NoError too),
+//! outward, one component per input component (an extra one may only be an enclosed cavity,
+//! reported), within 0.5h of the input (symmetric Hausdorff, away from open ends) or no worse than
+//! libigl's marching cubes of the same grid, mean distance ≤ 0.02h (≤ 0.04h at 2h, reported), and
+//! for closed inputs of the same volume within 0.5%. `--nocapture` prints the figures and the
+//! list of points not met.
+
+mod common;
+use common::*;
+use nalgebra::Point3;
+use rayon::prelude::*;
+use vesselmsr::bvh::MeshBvh;
+use vesselmsr::grid::{grid_for_mesh, GridOptions};
+use vesselmsr::levelset::marching_cubes::{extract_surface, ExtractOptions};
+use vesselmsr::levelset::project::{project_vertices, ProjectOptions};
+use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
+use vesselmsr::mesh::cap::{cap_holes, CapOptions};
+use vesselmsr::mesh::distance::sample_surface;
+use vesselmsr::mesh::info::mesh_info;
+use vesselmsr::mesh::measures::component_nesting_depths;
+use vesselmsr::mesh::topology::{boundary_loops, connected_components, Orientation};
+use vesselmsr::TriMesh;
+
+/// The open ends of an input: its rim vertices, and the input with its ends capped (caps from
+/// face `first_cap` on), to recognise the sheets that close the ends in a remeshed surface.
+struct OpenEnds {
+    rim: Vec<Point3<f64>>,
+    capped: MeshBvh,
+    first_cap: usize,
+}
+
+impl OpenEnds {
+    fn of(input: &TriMesh) -> Self {
+        let rim = boundary_loops(input)
+            .iter()
+            .flatten()
+            .map(|&v| input.vertices[v as usize])
+            .collect();
+        let opts = CapOptions {
+            orient_outward: false,
+            ..Default::default()
+        };
+        let (capped, report) = cap_holes(input, &opts).unwrap();
+        OpenEnds {
+            rim,
+            capped: MeshBvh::new(&capped),
+            first_cap: report.cap_faces.start,
+        }
+    }
+
+    /// Whether `p` is farther than `margin` from every rim vertex.
+    fn away(&self, p: &Point3<f64>, margin: f64) -> bool {
+        self.rim.iter().all(|e| (p - e).norm() > margin)
+    }
+
+    /// Points of a remeshed surface that do not stand for the open ends: their closest point on
+    /// the capped input is not on a cap and not within `margin` of the rim.
+    fn not_closing(&self, points: Vec<Point3<f64>>, margin: f64) -> Vec<Point3<f64>> {
+        points
+            .into_par_iter()
+            .filter(|p| {
+                let c = self.capped.closest_point(p);
+                (c.face as usize) < self.first_cap && self.away(&c.point, margin)
+            })
+            .collect()
+    }
+
+    /// Points of the input farther than `margin` from the rim.
+    fn away_from(&self, points: Vec<Point3<f64>>, margin: f64) -> Vec<Point3<f64>> {
+        points
+            .into_par_iter()
+            .filter(|p| self.away(p, margin))
+            .collect()
+    }
+}
+
+/// Largest and mean distance from `points` to the surface of `bvh`.
+fn distances(points: &[Point3<f64>], bvh: &MeshBvh) -> (f64, f64) {
+    let d: Vec<f64> = points
+        .par_iter()
+        .map(|p| bvh.closest_point(p).distance)
+        .collect();
+    let max = d.iter().copied().fold(0.0, f64::max);
+    (max, d.iter().sum::<f64>() / d.len().max(1) as f64)
+}
+
+/// Symmetric Hausdorff and mean distance (in h) between `out` and `input`, away from open ends.
+fn surface_gap(
+    out: &TriMesh,
+    input: &TriMesh,
+    input_bvh: &MeshBvh,
+    ends: &OpenEnds,
+    margin: f64,
+    h: f64,
+) -> (f64, f64) {
+    let out_bvh = MeshBvh::new(out);
+    let out_samples = ends.not_closing(sample_surface(out, 200_000), margin);
+    let out_vertices = ends.not_closing(out.vertices.clone(), margin);
+    let in_samples = ends.away_from(sample_surface(input, 200_000), margin);
+    let in_vertices = ends.away_from(input.vertices.clone(), margin);
+    let (a_max, a_mean) = distances(&out_samples, input_bvh);
+    let (av_max, _) = distances(&out_vertices, input_bvh);
+    let (b_max, b_mean) = distances(&in_samples, &out_bvh);
+    let (bv_max, _) = distances(&in_vertices, &out_bvh);
+    (
+        a_max.max(av_max).max(b_max).max(bv_max) / h,
+        0.5 * (a_mean + b_mean) / h,
+    )
+}
+
+/// libigl's marching cubes of the same grid values (the oracle), as a mesh.
+fn libigl_marching_cubes(phi: &vesselmsr::grid::Grid3, dir: &std::path::Path) -> TriMesh {
+    let grid = dir.join("phi.f64");
+    let bytes: Vec<u8> = phi
+        .data()
+        .iter()
+        .flat_map(|&v| (v as f64).to_le_bytes())
+        .collect();
+    std::fs::write(&grid, bytes).unwrap();
+    let out = dir.join("igl.ply");
+    let [nx, ny, nz] = phi.dims();
+    let [ox, oy, oz] = phi.transform().origin;
+    let args: Vec<String> = vec![
+        "marching_cubes".into(),
+        grid.to_string_lossy().into(),
+        nx.to_string(),
+        ny.to_string(),
+        nz.to_string(),
+        ox.to_string(),
+        oy.to_string(),
+        oz.to_string(),
+        phi.voxel().to_string(),
+        out.to_string_lossy().into(),
+    ];
+    let refs: Vec<&dyn AsRef<std::ffi::OsStr>> = args
+        .iter()
+        .map(|a| a as &dyn AsRef<std::ffi::OsStr>)
+        .collect();
+    oracle().run(&refs);
+    vesselmsr::io::read_mesh(&out).unwrap()
+}
+
+#[test]
+fn remesh_real_meshes_at_three_voxel_sizes() {
+    let Some(meshes) = real_meshes() else { return };
+    let oracle = oracle();
+    let tmp = tempfile::tempdir().unwrap();
+    let mut failures = Vec::new();
+    for (name, input) in &meshes {
+        let default_h = grid_for_mesh(input, &GridOptions::default())
+            .unwrap()
+            .voxel();
+        let ends = OpenEnds::of(input);
+        let input_bvh = MeshBvh::new(input);
+        let input_volume = mesh_info(input).volume;
+        for factor in [1.0, 2.0, 0.5] {
+            let h = default_h * factor;
+            let spec = grid_for_mesh(
+                input,
+                &GridOptions {
+                    voxel: Some(h),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            let phi = voxelize(
+                input,
+                spec.dims,
+                spec.transform,
+                &VoxelizeOptions::default(),
+            )
+            .unwrap();
+            let mut out: TriMesh = extract_surface(&phi, &ExtractOptions::default()).unwrap();
+            let opts = ProjectOptions {
+                max_distance: h,
+                ..Default::default()
+            };
+            let moved = project_vertices(&mut out, input, &input_bvh, &opts);
+            let info = mesh_info(&out);
+            let what = format!("{name} at {factor}×h (h = {h:.4e}, {:?} nodes)", spec.dims);
+            assert!(
+                info.watertight,
+                "{what}: not watertight: {:?}",
+                info.leaks()
+            );
+            assert_eq!(info.orientation, Orientation::Outward, "{what}");
+            let path = tmp.path().join("remeshed.ply");
+            vesselmsr::io::write_mesh(&path, &out).unwrap();
+            assert_eq!(oracle.check(&path)["manifold_status"], "NoError", "{what}");
+
+            // Components: one per input component; an extra one must be a cavity (a fold of the
+            // input closing on itself at this spacing), reported below.
+            let (n, labels) = connected_components(&out);
+            let depths = component_nesting_depths(&out, n, &labels);
+            let cavities = depths.iter().filter(|&&d| d % 2 == 1).count();
+            assert_eq!(
+                n - cavities,
+                1,
+                "{what}: {n} components, {cavities} of them cavities"
+            );
+            if cavities > 0 {
+                failures.push(format!("{what}: {cavities} enclosed cavity component(s)"));
+            }
+
+            // Distances, away from open ends (the remeshed surface closes them).
+            let margin = 2.0 * h.max(default_h);
+            let (hausdorff, mean) = surface_gap(&out, input, &input_bvh, &ends, margin, h);
+            let volume = match (input_volume, info.volume) {
+                (Some(v0), Some(v)) => format!("volume {:+.3}%", 100.0 * (v - v0) / v0),
+                _ => String::new(),
+            };
+            println!(
+                "{what}: {} faces ({moved} vertices projected), genus {:?}, hausdorff {hausdorff:.3}h, mean {mean:.4}h {volume}",
+                out.num_faces(),
+                info.genus
+            );
+            if hausdorff > 0.5 {
+                // Allowed where plain marching cubes cannot do better: no worse than libigl's
+                // marching cubes of the same grid values, measured the same way.
+                let igl = libigl_marching_cubes(&phi, tmp.path());
+                let (igl_hausdorff, igl_mean) =
+                    surface_gap(&igl, input, &input_bvh, &ends, margin, h);
+                println!("    libigl marching cubes on the same grid: hausdorff {igl_hausdorff:.3}h, mean {igl_mean:.4}h");
+                assert!(
+                    hausdorff <= igl_hausdorff * 1.05,
+                    "{what}: hausdorff {hausdorff:.3}h, worse than libigl's {igl_hausdorff:.3}h"
+                );
+                failures.push(format!(
+                    "{what}: hausdorff {hausdorff:.3}h > 0.5h (libigl {igl_hausdorff:.3}h)"
+                ));
+            }
+            // ≤ 0.02h holds at h and h/2; at 2h the triangles' own chord error on thin vessels
+            // (about (2h)²/8R) exceeds it: asserted looser and reported.
+            assert!(
+                mean <= if factor <= 1.0 { 0.02 } else { 0.04 },
+                "{what}: mean distance {mean:.4}h"
+            );
+            if mean > 0.02 {
+                failures.push(format!("{what}: mean distance {mean:.4}h > 0.02h"));
+            }
+            if let (Some(v0), Some(v)) = (input_volume, info.volume) {
+                assert!(((v - v0) / v0).abs() < 0.005, "{what}: {volume}");
+            }
+        }
+    }
+    for f in &failures {
+        println!("NOT MET: {f}");
+    }
+}
