@@ -4,8 +4,10 @@
 
 mod cap;
 mod compare;
+mod grid_args;
 mod info;
 mod progress;
+mod remesh;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -40,6 +42,10 @@ pub enum Command {
     Cap(cap::CapArgs),
     /// Distances between two surfaces (Hausdorff, mean, RMS) and their volumes.
     Compare(compare::CompareArgs),
+    /// Signed distance grid φ of a mesh (negative inside), written as .npy (+ .npy.json sidecar)
+    /// or .vti.
+    /// Mesh → signed distance grid → marching cubes: a closed, manifold, outward mesh.
+    Remesh(remesh::RemeshArgs),
 }
 
 /// Global settings every command sees.
@@ -81,6 +87,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Info { mesh } => info::run(&ctx, &mesh),
         Command::Cap(args) => cap::run(&ctx, &args),
         Command::Compare(args) => compare::run(&ctx, &args),
+        Command::Remesh(args) => remesh::run(&ctx, &args),
     }
 }
 

@@ -272,12 +272,7 @@ pub fn voxelize_with_report(
     report.inside_nodes = state.par_iter().filter(|&&s| s & NEG != 0).count();
     report.seconds_sign = t.elapsed().as_secs_f64();
     if report.inside_nodes == 0 {
-        return Err(Error::Geometry(format!(
-            "mesh encloses no volume: no node of the {}×{}×{} grid has a winding number of \
-             magnitude ≥ 0.5 (an open sheet such as a disc has no inside; a vessel thinner than \
-             the voxel {h} or a grid that misses the mesh has no inside node either)",
-            dims[0], dims[1], dims[2]
-        )));
+        return Err(no_volume(dims, h));
     }
 
     let t = Instant::now();
@@ -293,5 +288,20 @@ pub fn voxelize_with_report(
             *phi = if s & NEG != 0 { -m } else { m };
         });
     report.seconds_far = t.elapsed().as_secs_f64();
+    // Inside nodes that all sit on the surface itself (a flat sheet through grid nodes, where
+    // the winding number is exactly ½) enclose nothing either.
+    let whisker = (1e-3 * h) as f32;
+    if !grid.data().par_iter().any(|&v| v < -whisker) {
+        return Err(no_volume(dims, h));
+    }
     Ok((grid, report))
+}
+
+fn no_volume(dims: [usize; 3], h: f64) -> Error {
+    Error::Geometry(format!(
+        "mesh encloses no volume: no node of the {}×{}×{} grid has a winding number of \
+             magnitude ≥ 0.5 (an open sheet such as a disc has no inside; a vessel thinner than \
+             the voxel {h} or a grid that misses the mesh has no inside node either)",
+        dims[0], dims[1], dims[2]
+    ))
 }
