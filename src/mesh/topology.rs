@@ -448,7 +448,11 @@ pub(crate) fn orientation_of(
     }
     let vols = super::measures::component_signed_volumes(map.mesh(), n_components, labels);
     if n_components == 1 {
-        return if vols[0] >= 0.0 { Orientation::Outward } else { Orientation::Inward };
+        return if vols[0] >= 0.0 {
+            Orientation::Outward
+        } else {
+            Orientation::Inward
+        };
     }
     // Several shells: a cavity's shell rightly faces into the cavity (negative volume).
     let depths = super::measures::component_nesting_depths(map.mesh(), n_components, labels);
