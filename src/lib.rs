@@ -11,6 +11,7 @@ pub mod cli;
 pub mod error;
 pub mod grid;
 pub mod io;
+pub mod levelset;
 pub mod mesh;
 
 pub use error::{Error, Result};
