@@ -59,8 +59,9 @@ pub struct RedistanceOptions {
     /// The scheme of the sweeps (default: closest point).
     pub scheme: RedistanceScheme,
     /// Most sweeps (each in one of the 8 orders; default 64 = 8 rounds). The sweeping usually
-    /// stops on its own after 8–16; when it reaches this limit the values are still upper bounds
-    /// of the distance and [`RedistanceReport::converged`] is false.
+    /// stops on its own after 9–17; when it reaches this limit [`RedistanceReport::converged`]
+    /// is false and nodes the sweeps have not reached yet are ±∞ (±band). The Godunov values
+    /// only decrease from sweep to sweep, so they are then upper bounds of the converged ones.
     pub max_sweeps: usize,
     /// Godunov scheme: a decrease smaller than this, in voxels, does not count as a change when
     /// deciding convergence (default 1e-4). The closest-point scheme converges exactly.

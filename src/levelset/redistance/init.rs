@@ -2,13 +2,13 @@
 //! other sign, or φ = 0) and gives each a second-order patch of the interface: the nearest
 //! linearly interpolated crossing on its grid edges, and there the unit normal and the shape
 //! operator (second fundamental form) of the level set, from central differences of φ at the
-//! two ends of the edge interpolated to the crossing. Interpolating to the crossing cancels the
-//! first-order error a φ that is not a distance (say d·g with g > 0) has off the interface, since
-//! ∇(d·g) = g∇d and P·∇²(d·g)·P = g·P·∇²d·P where d = 0 (P: projection on the tangent plane).
-//! The distance of a point to the patch is the plane distance plus the quadratic correction of
-//! the osculating paraboloid (exact to second order for a sphere), kept between the plane
-//! distance's sign and the distance to the crossing point itself. Neighbours that are ±∞ are
-//! ignored (one-sided differences, or a plane patch, instead).
+//! two ends of the edge interpolated to the crossing, as principal curvatures and directions.
+//! Interpolating to the crossing cancels the first-order error a φ that is not a distance (say
+//! d·g with g > 0) has off the interface, since ∇(d·g) = g∇d and P·∇²(d·g)·P = g·P·∇²d·P where
+//! d = 0 (P: projection on the tangent plane). The distance of a point to a patch is the plane
+//! distance corrected along each principal direction by the osculating circle there (see
+//! [`patch_distance`]). Neighbours that are ±∞ are ignored (one-sided differences, or a plane
+//! patch, instead).
 
 use crate::grid::Grid3;
 use crate::{Error, Result};
@@ -41,9 +41,11 @@ pub(super) struct Patch {
     pub off: [f32; 3],
     /// Unit normal there (toward φ > 0); zero when unknown, and then the patch is the point.
     pub normal: [f32; 3],
-    /// Shape operator P·∇²φ·P/|∇φ| (xx, yy, zz, xy, xz, yz; per voxel): positive where the
-    /// interface curves away from the normal, as a sphere seen from outside.
-    pub shape: [f32; 6],
+    /// Principal direction (unit, tangent) of the principal curvature farther from 0.
+    pub principal: [f32; 3],
+    /// That curvature, then the other one (per voxel, clamped to ±[`MAX_CURVATURE`]): positive
+    /// where the interface curves away from the normal, as a sphere seen from outside.
+    pub kappa: [f32; 2],
 }
 
 impl Patch {
@@ -53,39 +55,64 @@ impl Patch {
     }
 }
 
+/// Largest curvature a patch is given, per voxel: a radius of curvature under one voxel is
+/// not resolved by the grid, and a kink of φ (an edge of a box, the seam between two shapes)
+/// shows up in the finite differences as a huge curvature that must not bend the patch.
+const MAX_CURVATURE: f64 = 1.0;
+
+/// How far toward its centre of curvature a point may be (as a fraction of the radius) before
+/// the curvature is reduced (see [`circle_correction`]).
+const FOCAL_LIMIT: f32 = 0.9;
+
+/// Signed distance from (a along the normal, τ along the plane) to the circle of curvature κ
+/// tangent to the plane at the origin, minus a: (κ(a² + τ²) + a − a·s)/(s + 1) with
+/// s = √((1 + κa)² + κ²τ²). Exact for any κ (0: a plane) and on both sides of the focal point.
+#[inline]
+fn circle_correction(kappa: f32, tau: f32, a: f32) -> f32 {
+    // On the concave side, keep x short of the centre of curvature: past it the circle would
+    // measure to its far side, and there a small error of κ (from finite differences) makes a
+    // large error of the distance. Deeper than ¾ of the radius, the radius is taken as 4/3 of
+    // the depth.
+    let kappa = if kappa * a < -FOCAL_LIMIT {
+        -FOCAL_LIMIT / a
+    } else {
+        kappa
+    };
+    let q = 1.0 + kappa * a;
+    let s = (q * q + kappa * kappa * tau * tau).sqrt();
+    (kappa * (a * a + tau * tau) + a - a * s) / (s + 1.0)
+}
+
 /// Distance (voxels, ≥ 0) from node `x` (voxel-index coordinates, whole numbers) to the
-/// interface patch: the plane distance a plus ½·tᵀSt/(1 + a·κ_t) (t: the offset along the
-/// plane, κ_t = tᵀSt/|t|²: the osculating paraboloid, exact to second order for a sphere), kept
-/// on the side of a and no farther than the patch's point itself. In f32: x − base is an exact
-/// integer difference, so the offset from the point keeps f32 precision relative to itself.
+/// interface patch. With v = x − point, a = n·v, t = v − a·n (τ = |t|) and t₁ = v·e₁ along the
+/// principal direction of the curvature κ₁ farther from 0 (κ₂ the other): the signed distance
+/// a + C(κ₂, τ) + C(κ₁, t₁) − C(κ₂, t₁), C(κ, s) being what the osculating circle of curvature
+/// κ in the plane of n and the offset s adds to the plane distance ([`circle_correction`]).
+/// That is a sphere of curvature κ₂ plus the excess curvature along e₁: exact for a sphere
+/// (any offset), for a cylinder (offsets along the principal directions), to second order
+/// otherwise, and well-behaved past focal points (deep inside a tube); the plane distance for a
+/// flat patch. Kept no larger than the distance to the patch's point itself (a point of the
+/// interface). In f32: x − base is an exact integer difference, so the offset from the point
+/// keeps f32 precision relative to itself.
 #[inline]
 pub(super) fn patch_distance(patch: &Patch, x: [f32; 3]) -> f32 {
     let v0 = (x[0] - patch.base[0]) - patch.off[0];
     let v1 = (x[1] - patch.base[1]) - patch.off[1];
     let v2 = (x[2] - patch.base[2]) - patch.off[2];
     let vv = v0 * v0 + v1 * v1 + v2 * v2;
+    let to_point = vv.sqrt();
     let [n0, n1, n2] = patch.normal;
-    let a = v0 * n0 + v1 * n1 + v2 * n2;
     if n0 == 0.0 && n1 == 0.0 && n2 == 0.0 {
-        return vv.sqrt();
+        return to_point;
     }
-    let (t0, t1, t2) = (v0 - a * n0, v1 - a * n1, v2 - a * n2);
-    let [sxx, syy, szz, sxy, sxz, syz] = patch.shape;
-    let tst = sxx * t0 * t0
-        + syy * t1 * t1
-        + szz * t2 * t2
-        + 2.0 * (sxy * t0 * t1 + sxz * t0 * t2 + syz * t1 * t2);
-    let tt = t0 * t0 + t1 * t1 + t2 * t2;
-    let mut est = a;
-    if tt > 0.0 {
-        // Near a focal point (1 + a·κ_t → 0) the paraboloid says little: damp it.
-        let den = (1.0 + a * tst / tt).max(0.5);
-        est += 0.5 * tst / den;
-    }
-    if est * a < 0.0 {
-        est = 0.0;
-    }
-    est.abs().min(vv.sqrt())
+    let a = v0 * n0 + v1 * n1 + v2 * n2;
+    let tau = (vv - a * a).max(0.0).sqrt();
+    let [e0, e1, e2] = patch.principal;
+    let t1 = v0 * e0 + v1 * e1 + v2 * e2;
+    let [k1, k2] = patch.kappa;
+    let signed = a + circle_correction(k2, tau, a) + circle_correction(k1, t1, a)
+        - circle_correction(k2, t1, a);
+    signed.abs().min(to_point)
 }
 
 /// One interface node: (flat index, distance, patch).
@@ -177,13 +204,21 @@ fn gradient(phi: &Grid3, pos: [usize; 3], p: f64) -> [f64; 3] {
 }
 
 /// Central-difference ∇²φ at `pos` (xx, yy, zz, xy, xz, yz), or None when one of the 18
-/// neighbours it needs is missing or infinite.
+/// neighbours it needs is missing or infinite. Along an axis of one node φ counts as constant
+/// (a 2-D grid).
 fn hessian(phi: &Grid3, pos: [usize; 3], p: f64) -> Option<[f64; 6]> {
+    let flat = phi.dims().map(|d| d == 1);
     let mut h = [0.0; 6];
     for (a, slot) in h.iter_mut().take(3).enumerate() {
-        *slot = value(phi, pos, unit_step(a, 1))? - 2.0 * p + value(phi, pos, unit_step(a, -1))?;
+        if !flat[a] {
+            *slot =
+                value(phi, pos, unit_step(a, 1))? - 2.0 * p + value(phi, pos, unit_step(a, -1))?;
+        }
     }
     for (slot, (a, b)) in [(3, (0, 1)), (4, (0, 2)), (5, (1, 2))] {
+        if flat[a] || flat[b] {
+            continue;
+        }
         let at = |sa: isize, sb: isize| {
             let mut d = [0; 3];
             d[a] = sa;
@@ -228,6 +263,15 @@ fn node_seed(phi: &Grid3, pos: [usize; 3]) -> Option<Seed> {
         }
     }
     let (theta, axis, sign, q) = nearest?;
+    let theta = if theta > 0.0 && std::env::var_os("RLINEAR").is_none() {
+        // The cubic through φ one node before p and one after q places the crossing to
+        // fourth order where φ is smooth; the linear fraction where that stencil is missing.
+        let before = value(phi, pos, unit_step(axis, -sign));
+        let after = value(phi, pos, unit_step(axis, 2 * sign));
+        refine_crossing(before, p, q, after, theta)
+    } else {
+        theta
+    };
     let qpos = pos.map(|c| c as isize);
     let mut qpos = qpos;
     qpos[axis] += sign;
@@ -267,11 +311,11 @@ fn node_seed(phi: &Grid3, pos: [usize; 3]) -> Option<Seed> {
     } else {
         [0.0; 3]
     };
-    let shape = match hess {
+    let (principal, kappa) = match hess {
         Some(h) if normal != [0.0; 3] && glen > 0.0 && glen.is_finite() => {
-            tangential(&h, &normal).map(|c| (c / glen) as f32)
+            principal_curvatures(&h, &normal, glen)
         }
-        _ => [0.0; 6],
+        _ => (tangent_basis(&normal).0, [0.0; 2]),
     };
     let mut off = [0.0f32; 3];
     off[axis] = (theta * sign as f64) as f32;
@@ -279,30 +323,93 @@ fn node_seed(phi: &Grid3, pos: [usize; 3]) -> Option<Seed> {
         base,
         off,
         normal: normal.map(|c| c as f32),
-        shape,
+        principal: principal.map(|c| c as f32),
+        kappa: kappa.map(|c| c.clamp(-MAX_CURVATURE, MAX_CURVATURE) as f32),
     };
     let dist = patch_distance(&patch, base).min(1.0);
     Some((idx, dist, patch))
 }
 
-/// P·H·P with P = I − n·nᵀ (symmetric, as xx, yy, zz, xy, xz, yz).
-fn tangential(h: &[f64], n: &[f64; 3]) -> [f64; 6] {
+/// The root in [0, 1] of the cubic through (−1, f₋), (0, f₀), (1, f₁), (2, f₂) (f₀, f₁ of
+/// opposite signs) by Newton's method from the linear root `theta`; `theta` itself when a
+/// value is missing or the iteration leaves the edge.
+fn refine_crossing(before: Option<f64>, f0: f64, f1: f64, after: Option<f64>, theta: f64) -> f64 {
+    let (Some(fm), Some(f2)) = (before, after) else {
+        return theta;
+    };
+    // Newton form of the interpolating cubic in t.
+    let d1 = f1 - f0;
+    let d2 = 0.5 * (f1 - 2.0 * f0 + fm); // second divided difference on −1, 0, 1
+    let d3 = (f2 - 3.0 * f1 + 3.0 * f0 - fm) / 6.0; // third on −1, 0, 1, 2
+                                                    // c(t) = f0 + d1·t + d2·t(t − 1) + d3·(t + 1)t(t − 1)
+    let c = |t: f64| f0 + d1 * t + d2 * t * (t - 1.0) + d3 * (t * t * t - t);
+    let dc = |t: f64| d1 + d2 * (2.0 * t - 1.0) + d3 * (3.0 * t * t - 1.0);
+    let mut t = theta;
+    for _ in 0..4 {
+        let slope = dc(t);
+        if slope == 0.0 || !slope.is_finite() {
+            return theta;
+        }
+        t -= c(t) / slope;
+    }
+    if t.is_finite() && (0.0..=1.0).contains(&t) && (t - theta).abs() < 0.5 {
+        t
+    } else {
+        theta
+    }
+}
+
+/// Two unit vectors completing the unit `n` (or any unit vector, for n = 0) to an orthonormal
+/// frame.
+fn tangent_basis(n: &[f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let cross = |a: &[f64; 3], b: &[f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    // The axis least aligned with n.
+    let axis = (0..3)
+        .min_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs()))
+        .unwrap_or(0);
+    let b1 = cross(n, &unit_step(axis, 1).map(|c| c as f64));
+    let b1 = unit(b1).unwrap_or([1.0, 0.0, 0.0]);
+    (b1, cross(n, &b1))
+}
+
+/// Principal direction of the principal curvature farther from 0, that curvature and the other
+/// one, of the level set with unit normal `n`, from the Hessian `h` (xx, yy, zz, xy, xz, yz)
+/// and |∇φ| = `glen`: the eigen-pairs of the shape operator bᵢᵀ·H·bⱼ/|∇φ| in a tangent frame
+/// (b₁, b₂).
+fn principal_curvatures(h: &[f64], n: &[f64; 3], glen: f64) -> ([f64; 3], [f64; 2]) {
     let m = [[h[0], h[3], h[4]], [h[3], h[1], h[5]], [h[4], h[5], h[2]]];
-    let p: [[f64; 3]; 3] =
-        std::array::from_fn(|i| std::array::from_fn(|j| f64::from(i == j) - n[i] * n[j]));
-    let mut pm = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            pm[i][j] = (0..3).map(|k| p[i][k] * m[k][j]).sum();
+    let (b1, b2) = tangent_basis(n);
+    let form = |u: &[f64; 3], w: &[f64; 3]| {
+        let mut s = 0.0;
+        for i in 0..3 {
+            for j in 0..3 {
+                s += u[i] * m[i][j] * w[j];
+            }
         }
+        s / glen
+    };
+    let (m11, m12, m22) = (form(&b1, &b1), form(&b1, &b2), form(&b2, &b2));
+    let mean = 0.5 * (m11 + m22);
+    let spread = (0.25 * (m11 - m22) * (m11 - m22) + m12 * m12).sqrt();
+    // Direction of the larger eigenvalue; the smaller one's is a quarter turn on.
+    let mut angle = 0.5 * (2.0 * m12).atan2(m11 - m22);
+    let (mut big, mut small) = (mean + spread, mean - spread);
+    if small.abs() > big.abs() {
+        std::mem::swap(&mut big, &mut small);
+        angle += std::f64::consts::FRAC_PI_2;
     }
-    let mut out = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            out[i][j] = (0..3).map(|k| pm[i][k] * p[k][j]).sum();
-        }
-    }
-    [
-        out[0][0], out[1][1], out[2][2], out[0][1], out[0][2], out[1][2],
-    ]
+    let (c, s) = (angle.cos(), angle.sin());
+    let e1 = std::array::from_fn(|i| c * b1[i] + s * b2[i]);
+    (e1, [big, small])
+}
+
+fn unit(g: [f64; 3]) -> Option<[f64; 3]> {
+    let len = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    (len > 0.0 && len.is_finite()).then(|| g.map(|c| c / len))
 }

@@ -25,9 +25,10 @@ use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering::Relaxed};
 /// 1/√3, the least a Godunov update can add to the smallest neighbour.
 const FRAC_1_SQRT_3: f32 = 0.577_350_26;
 /// Sign bit of `val`: a frozen interface node.
+const DIAGONALS: bool = true;
 const FROZEN: u32 = 0x8000_0000;
 /// Rows per side of a tile of the (y, z) plane (the unit of parallel work).
-const TILE: usize = 16;
+const TILE: usize = 8;
 /// An empty span of a row.
 const EMPTY_SPAN: u64 = u32::MAX as u64;
 
@@ -55,7 +56,8 @@ struct Sweeper<'a> {
     patch: &'a [Patch],
     /// Starting value of nodes that are not frozen (Godunov: the band, or ∞).
     far: f32,
-    /// Closest point: largest squared distance kept (band², voxels²; ∞ without a band).
+    /// Closest point: largest squared distance to a crossing point kept ((band + 2)², voxels²;
+    /// ∞ without a band).
     limit2: f32,
     /// Godunov: smallest decrease that counts as a change (voxels).
     tolerance: f32,
@@ -98,7 +100,9 @@ pub(super) fn sweep_distance(
         Vec::new()
     };
     let rows = ny * nz;
-    let visited: Vec<AtomicU32> = (0..rows).map(|_| AtomicU32::new(0)).collect();
+    // Closest point: one stamp per axis and side the row was last read from (see `row`).
+    let slots = if closest { 6 * rows } else { rows };
+    let visited: Vec<AtomicU32> = (0..slots).map(|_| AtomicU32::new(0)).collect();
     let changed: Vec<AtomicU32> = (0..rows).map(|_| AtomicU32::new(0)).collect();
     let span: Vec<AtomicU64> = (0..rows).map(|_| AtomicU64::new(EMPTY_SPAN)).collect();
     for (s, (&node, &d)) in seeds.node.iter().zip(&seeds.dist).enumerate() {
@@ -136,7 +140,9 @@ pub(super) fn sweep_distance(
         point,
         patch: &seeds.patch,
         far,
-        limit2: band_vox.map_or(f32::INFINITY, |b| (b * b) as f32),
+        // Crossing points a little beyond the band still serve nodes inside it (a patch can be
+        // nearer than its point): keep two voxels more than the band.
+        limit2: band_vox.map_or(f32::INFINITY, |b| ((b + 2.0) * (b + 2.0)) as f32),
         tolerance: opts.tolerance as f32,
         visited,
         changed,
@@ -165,7 +171,8 @@ impl Sweeper<'_> {
         for s in 1..=max_sweeps {
             let order = ORDERS[(s - 1) % 8];
             let any = AtomicBool::new(false);
-            let stamp = s as u32;
+            // Stamps: 1 marks the rows of the interface nodes, sweep s stamps s + 1.
+            let stamp = s as u32 + 1;
             let tile = |a: usize, b: usize| {
                 // Rows of tile (a, b) in sweep order, k-major: (jj, kk) counted along the sweep.
                 let mut changed = false;
@@ -204,26 +211,84 @@ impl Sweeper<'_> {
     fn row(&self, j: usize, k: usize, order: [bool; 3], stamp: u32) -> bool {
         let [nx, ny, nz] = self.dims;
         let r = j + ny * k;
-        let (mut last_change, mut span) = (0, EMPTY_SPAN);
-        for kk in k.saturating_sub(1)..(k + 2).min(nz) {
-            for jj in j.saturating_sub(1)..(j + 2).min(ny) {
-                let q = jj + ny * kk;
-                last_change = last_change.max(self.changed[q].load(Relaxed));
-                let s = self.span[q].load(Relaxed);
-                if s & 0xffff_ffff <= s >> 32 {
-                    span = widen(span, s & 0xffff_ffff, s >> 32);
+        let (y_up, z_up) = (
+            if order[1] {
+                j.checked_sub(1)
+            } else {
+                (j + 1 < ny).then_some(j + 1)
+            },
+            if order[2] {
+                k.checked_sub(1)
+            } else {
+                (k + 1 < nz).then_some(k + 1)
+            },
+        );
+        let y_up = y_up.map(|jj| jj + ny * k);
+        let z_up = z_up.map(|kk| j + ny * kk);
+        let mut span = EMPTY_SPAN;
+        let mut take_span = |q: usize| {
+            let s = self.span[q].load(Relaxed);
+            if s & 0xffff_ffff <= s >> 32 {
+                span = widen(span, s & 0xffff_ffff, s >> 32);
+            }
+        };
+        let changed_at = |q: usize| self.changed[q].load(Relaxed);
+        match self.scheme {
+            RedistanceScheme::Godunov => {
+                // The update reads both neighbours along each axis whatever the order: the row
+                // can change only if it or one of its 4 face rows changed since its last visit
+                // (in that sweep or after it).
+                let faces = [
+                    Some(r),
+                    j.checked_sub(1).map(|jj| jj + ny * k),
+                    (j + 1 < ny).then(|| r + 1),
+                    k.checked_sub(1).map(|kk| j + ny * kk),
+                    (k + 1 < nz).then(|| r + ny),
+                ];
+                let mut last = 0;
+                for q in faces.into_iter().flatten() {
+                    last = last.max(changed_at(q));
+                    take_span(q);
+                }
+                if last == 0 || last < self.visited[r].load(Relaxed) {
+                    return false;
+                }
+                self.visited[r].store(stamp, Relaxed);
+            }
+            RedistanceScheme::ClosestPoint => {
+                // A node reads only its 3 upwind face neighbours, which depend on the order: the
+                // row is worth a visit if its own row, its upwind y row or its upwind z row
+                // changed since the last visit that read them from the same side.
+                let slot = |axis: usize| 6 * r + 2 * axis + usize::from(order[axis]);
+                let mut fresh = false;
+                for (axis, q) in [(0, Some(r)), (1, y_up), (2, z_up)] {
+                    if let Some(q) = q {
+                        fresh |= changed_at(q) > self.visited[slot(axis)].load(Relaxed);
+                        take_span(q);
+                    }
+                }
+                if let (Some(qy), Some(_)) = (y_up, z_up) {
+                    // The diagonal row, read when the y and z sides both match.
+                    let q = qy + (z_up.unwrap() as isize - r as isize) as usize;
+                    let seen = self.visited[slot(1)]
+                        .load(Relaxed)
+                        .min(self.visited[slot(2)].load(Relaxed));
+                    fresh |= changed_at(q) > seen;
+                    take_span(q);
+                }
+                if !fresh {
+                    return false;
+                }
+                for axis in 0..3 {
+                    self.visited[slot(axis)].store(stamp, Relaxed);
                 }
             }
         }
-        if last_change == 0 || last_change < self.visited[r].load(Relaxed) {
-            return false;
-        }
-        self.visited[r].store(stamp, Relaxed);
         let (lo, hi) = (span & 0xffff_ffff, span >> 32);
         if lo > hi {
             return false;
         }
-        // Nodes that can change: the span of the rows around, widened by one.
+        // Nodes that can change: the span of the rows read, widened by one.
         let (lo, hi) = (
             lo.saturating_sub(1) as usize,
             ((hi + 1) as usize).min(nx - 1),
@@ -370,19 +435,48 @@ impl Sweeper<'_> {
         let (y, z) = (j as f32, k as f32);
         let (ids, val, point) = (&self.ids[..], &self.val[..], &self.point[..]);
         let limit2 = self.limit2;
+        let diagonals = DIAGONALS;
+        // The id the previous node (upwind along x) ended with, carried in a register.
+        let mut prev: Option<u32> = None;
         let (new_lo, new_hi) = Self::walk(nx, order[0], lo, hi, |i| {
             let idx = base + i;
             let bits = val[idx].load(Relaxed);
+            let own = ids[idx].load(Relaxed);
+            let cx = match prev {
+                Some(p) => p,
+                None if i == first => own,
+                None => ids[idx.wrapping_add_signed(dx)].load(Relaxed),
+            };
             if bits & FROZEN != 0 {
+                prev = Some(own);
                 return false;
             }
-            let own = ids[idx].load(Relaxed);
             // A missing neighbour offers this node's own interface node (nothing new).
             let at =
                 |d: Option<isize>| d.map_or(own, |d| ids[idx.wrapping_add_signed(d)].load(Relaxed));
-            let cx = at((i != first).then_some(dx));
             let (cy, cz) = (at(dy), at(dz));
-            if (cx ^ own) | (cy ^ own) | (cz ^ own) == 0 {
+            let (cxy, cxz, cyz, cxyz) = if diagonals {
+                let ddx = (i != first).then_some(dx);
+                let sum = |a: Option<isize>, b: Option<isize>| a.zip(b).map(|(a, b)| a + b);
+                (
+                    at(sum(ddx, dy)),
+                    at(sum(ddx, dz)),
+                    at(sum(dy, dz)),
+                    at(sum(sum(ddx, dy), dz)),
+                )
+            } else {
+                (own, own, own, own)
+            };
+            if (cx ^ own)
+                | (cy ^ own)
+                | (cz ^ own)
+                | (cxy ^ own)
+                | (cxz ^ own)
+                | (cyz ^ own)
+                | (cxyz ^ own)
+                == 0
+            {
+                prev = Some(own);
                 return false;
             }
             let x = i as f32;
@@ -398,16 +492,33 @@ impl Sweeper<'_> {
                     (da, ia)
                 }
             };
-            let (dx2, dy2, dz2) = (dist2(cx), dist2(cy), dist2(cz));
-            let (best, best_id) = pick(
-                pick((f32::from_bits(bits), own), (dx2, cx)),
-                pick((dy2, cy), (dz2, cz)),
+            // The y and z candidates do not depend on the previous node: settle them first, so
+            // the chain from node to node is only the x candidate.
+            let mut across = pick(
+                (f32::from_bits(bits), own),
+                pick((dist2(cy), cy), (dist2(cz), cz)),
             );
+            if diagonals {
+                across = pick(
+                    pick(across, (dist2(cxy), cxy)),
+                    pick(
+                        pick((dist2(cxz), cxz), (dist2(cyz), cyz)),
+                        (dist2(cxyz), cxyz),
+                    ),
+                );
+            }
+            let (best, best_id) = if cx == across.1 {
+                across
+            } else {
+                pick(across, (dist2(cx), cx))
+            };
             if best_id != own && best <= limit2 {
                 ids[idx].store(best_id, Relaxed);
                 val[idx].store(best.to_bits(), Relaxed);
+                prev = Some(best_id);
                 return true;
             }
+            prev = Some(own);
             false
         });
         (new_lo <= new_hi, new_lo, new_hi)
