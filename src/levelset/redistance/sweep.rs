@@ -25,7 +25,6 @@ use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering::Relaxed};
 /// 1/√3, the least a Godunov update can add to the smallest neighbour.
 const FRAC_1_SQRT_3: f32 = 0.577_350_26;
 /// Sign bit of `val`: a frozen interface node.
-const DIAGONALS: bool = true;
 const FROZEN: u32 = 0x8000_0000;
 /// Rows per side of a tile of the (y, z) plane (the unit of parallel work).
 const TILE: usize = 8;
@@ -408,9 +407,10 @@ impl Sweeper<'_> {
     }
 
     /// One closest-point pass along row (j, k) over lo..=hi (and on while values change): each
-    /// node that is not frozen takes, among its own interface node and those carried by its 3
-    /// upwind face neighbours in this sweep order, the one whose crossing point is nearest.
-    /// Returns (changed, span of changed nodes).
+    /// node that is not frozen takes, among its own interface node and those carried by its 7
+    /// upwind neighbours in this sweep order (±1 or 0 along each axis, toward where the sweep
+    /// comes from), the one whose crossing point is nearest. Returns (changed, span of changed
+    /// nodes).
     fn closest_point_row(
         &self,
         j: usize,
@@ -421,62 +421,58 @@ impl Sweeper<'_> {
     ) -> (bool, usize, usize) {
         let [nx, ny, nz] = self.dims;
         let base = nx * (j + ny * k);
-        // Upwind rows in y and z (None on the border of the grid), as flat-index offsets.
-        let dy = match order[1] {
-            true => (j > 0).then(|| -(nx as isize)),
-            false => (j + 1 < ny).then_some(nx as isize),
+        // Upwind steps as flat-index offsets; 0 where the neighbour is off the grid, which
+        // offers the node's own interface node (nothing new).
+        let dy: isize = match order[1] {
+            true if j > 0 => -(nx as isize),
+            false if j + 1 < ny => nx as isize,
+            _ => 0,
         };
-        let dz = match order[2] {
-            true => (k > 0).then(|| -((nx * ny) as isize)),
-            false => (k + 1 < nz).then_some((nx * ny) as isize),
+        let dz: isize = match order[2] {
+            true if k > 0 => -((nx * ny) as isize),
+            false if k + 1 < nz => (nx * ny) as isize,
+            _ => 0,
         };
         let dx: isize = if order[0] { -1 } else { 1 };
         let first = if order[0] { 0 } else { nx - 1 };
+        // The 6 candidates besides the x neighbour: y, z, yz, xy, xz, xyz; the first node of the
+        // row has no x neighbour (its x-diagonal candidates fall back to y, z, yz).
+        let offsets = [dy, dz, dy + dz, dx + dy, dx + dz, dx + dy + dz];
+        let offsets_first = [dy, dz, dy + dz, dy, dz, dy + dz];
         let (y, z) = (j as f32, k as f32);
         let (ids, val, point) = (&self.ids[..], &self.val[..], &self.point[..]);
         let limit2 = self.limit2;
-        let diagonals = DIAGONALS;
-        // The id the previous node (upwind along x) ended with, carried in a register.
-        let mut prev: Option<u32> = None;
+        // The id the previous node (upwind along x) ended with, carried in a register;
+        // u32::MAX before the first visited node.
+        let mut prev = u32::MAX;
         let (new_lo, new_hi) = Self::walk(nx, order[0], lo, hi, |i| {
             let idx = base + i;
             let bits = val[idx].load(Relaxed);
             let own = ids[idx].load(Relaxed);
-            let cx = match prev {
-                Some(p) => p,
-                None if i == first => own,
-                None => ids[idx.wrapping_add_signed(dx)].load(Relaxed),
+            let cx = if prev != u32::MAX {
+                prev
+            } else if i == first {
+                own
+            } else {
+                ids[idx.wrapping_add_signed(-dx)].load(Relaxed)
             };
             if bits & FROZEN != 0 {
-                prev = Some(own);
+                prev = own;
                 return false;
             }
-            // A missing neighbour offers this node's own interface node (nothing new).
-            let at =
-                |d: Option<isize>| d.map_or(own, |d| ids[idx.wrapping_add_signed(d)].load(Relaxed));
-            let (cy, cz) = (at(dy), at(dz));
-            let (cxy, cxz, cyz, cxyz) = if diagonals {
-                let ddx = (i != first).then_some(dx);
-                let sum = |a: Option<isize>, b: Option<isize>| a.zip(b).map(|(a, b)| a + b);
-                (
-                    at(sum(ddx, dy)),
-                    at(sum(ddx, dz)),
-                    at(sum(dy, dz)),
-                    at(sum(sum(ddx, dy), dz)),
-                )
-            } else {
-                (own, own, own, own)
-            };
-            if (cx ^ own)
-                | (cy ^ own)
-                | (cz ^ own)
-                | (cxy ^ own)
-                | (cxz ^ own)
-                | (cyz ^ own)
-                | (cxyz ^ own)
-                == 0
-            {
-                prev = Some(own);
+            let o = if i == first { &offsets_first } else { &offsets };
+            let at = |d: isize| ids[idx.wrapping_add_signed(d)].load(Relaxed);
+            // (Written out: array::map is not inlined here.)
+            let c = [at(o[0]), at(o[1]), at(o[2]), at(o[3]), at(o[4]), at(o[5])];
+            let differ = (cx ^ own)
+                | (c[0] ^ own)
+                | (c[1] ^ own)
+                | (c[2] ^ own)
+                | (c[3] ^ own)
+                | (c[4] ^ own)
+                | (c[5] ^ own);
+            if differ == 0 {
+                prev = own;
                 return false;
             }
             let x = i as f32;
@@ -492,22 +488,18 @@ impl Sweeper<'_> {
                     (da, ia)
                 }
             };
-            // The y and z candidates do not depend on the previous node: settle them first, so
-            // the chain from node to node is only the x candidate.
-            let mut across = pick(
-                (f32::from_bits(bits), own),
-                pick((dist2(cy), cy), (dist2(cz), cz)),
-            );
-            if diagonals {
-                across = pick(
-                    pick(across, (dist2(cxy), cxy)),
-                    pick(
-                        pick((dist2(cxz), cxz), (dist2(cyz), cyz)),
-                        (dist2(cxyz), cxyz),
-                    ),
-                );
+            // The other candidates do not depend on the previous node: settle them first, so
+            // the chain from node to node is only the x candidate. Only candidates that differ
+            // from the node's own and from the one before in the list are measured.
+            let mut across = (f32::from_bits(bits), own);
+            let mut last = own;
+            for id in c {
+                if id != own && id != last {
+                    across = pick(across, (dist2(id), id));
+                    last = id;
+                }
             }
-            let (best, best_id) = if cx == across.1 {
+            let (best, best_id) = if cx == across.1 || cx == own {
                 across
             } else {
                 pick(across, (dist2(cx), cx))
@@ -515,10 +507,10 @@ impl Sweeper<'_> {
             if best_id != own && best <= limit2 {
                 ids[idx].store(best_id, Relaxed);
                 val[idx].store(best.to_bits(), Relaxed);
-                prev = Some(best_id);
+                prev = best_id;
                 return true;
             }
-            prev = Some(own);
+            prev = own;
             false
         });
         (new_lo <= new_hi, new_lo, new_hi)
