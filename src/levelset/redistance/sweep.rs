@@ -12,9 +12,11 @@
 //! the arrays without `unsafe`. Per node: `val`, f32 bits of the distance (Godunov) or of the
 //! squared distance to the carried crossing point (closest point), in voxels, the sign bit
 //! marking a frozen interface node; `ids` (closest point): the interface node carried. Per row:
-//! the sweep that last visited and last changed it (a row none of whose 9 rows around changed
-//! since its last visit is skipped) and the span of its nodes that hold a value (only that
-//! span, widened by one, of the 9 rows can change, plus whatever the sweep carries along x).
+//! the sweep that last changed it, the sweep(s) that last visited it, and the span of its nodes
+//! that hold a value. A row is visited only if a row it reads changed since it last read that
+//! row (Godunov reads the 4 face rows whatever the order; the closest-point scheme reads its
+//! upwind rows, so it keeps one stamp per axis and side), and only the span of the rows read,
+//! widened by one, is walked, plus whatever the sweep carries on along x.
 
 use super::init::{patch_distance, Patch, Seeds};
 use super::{RedistanceOptions, RedistanceScheme};
@@ -60,8 +62,11 @@ struct Sweeper<'a> {
     limit2: f32,
     /// Godunov: smallest decrease that counts as a change (voxels).
     tolerance: f32,
-    /// Per row (j + ny·k): the sweep that last visited / changed it (0: never).
+    /// Per row (j + ny·k), stamps (sweep s stamps s + 1; 1 marks the rows of the interface
+    /// nodes; 0: never): Godunov, the last visit; closest point, 6 per row, the last visit that
+    /// read the row's x, y and z neighbours from the low or the high side.
     visited: Vec<AtomicU32>,
+    /// Per row: the stamp of its last change.
     changed: Vec<AtomicU32>,
     /// Per row: lo | hi << 32, the nodes from lo to hi hold a value (lo > hi: none).
     span: Vec<AtomicU64>,
@@ -205,8 +210,8 @@ impl Sweeper<'_> {
         (max_sweeps, false)
     }
 
-    /// Sweeps row (j, k) along x unless none of the 9 rows around it (itself included) changed
-    /// since its last visit; true when a value changed by more than the tolerance.
+    /// Sweeps row (j, k) along x unless none of the rows it reads changed since it last read
+    /// them; true when a value changed (by more than the tolerance, for Godunov).
     fn row(&self, j: usize, k: usize, order: [bool; 3], stamp: u32) -> bool {
         let [nx, ny, nz] = self.dims;
         let r = j + ny * k;
