@@ -453,7 +453,9 @@ def read_mask(path: str | os.PathLike, dims: tuple[int, int, int]) -> np.ndarray
     except OSError as e:
         raise OracleError(f"{path}: {e.strerror or e}") from None
     if len(data) != nx * ny * nz:
-        raise OracleError(f"{path}: {len(data)} bytes for a grid of {nx}×{ny}×{nz} = {nx * ny * nz} nodes")
+        raise OracleError(
+            f"{path}: {len(data)} bytes for a grid of {nx}×{ny}×{nz} = {nx * ny * nz} nodes"
+        )
     return np.frombuffer(data, dtype=np.uint8).reshape(nz, ny, nx) != 0
 
 
