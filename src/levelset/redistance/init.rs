@@ -263,7 +263,7 @@ fn node_seed(phi: &Grid3, pos: [usize; 3]) -> Option<Seed> {
         }
     }
     let (theta, axis, sign, q) = nearest?;
-    let theta = if theta > 0.0 && std::env::var_os("RLINEAR").is_none() {
+    let theta = if theta > 0.0 {
         // The cubic through φ one node before p and one after q places the crossing to
         // fourth order where φ is smooth; the linear fraction where that stencil is missing.
         let before = value(phi, pos, unit_step(axis, -sign));
@@ -301,8 +301,8 @@ fn node_seed(phi: &Grid3, pos: [usize; 3]) -> Option<Seed> {
     let glen = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
     // Sign change along the edge, as φ per voxel along +axis (0 when φ = 0 here).
     let along = (q - p) * sign as f64;
-    let normal: [f64; 3] = if glen > 0.0 && glen.is_finite() && (p == 0.0 || g[axis] * along > 0.0)
-    {
+    let trusted = glen > 0.0 && glen.is_finite() && (p == 0.0 || g[axis] * along > 0.0);
+    let normal: [f64; 3] = if trusted {
         std::array::from_fn(|c| g[c] / glen)
     } else if p != 0.0 {
         // The interpolated gradient vanishes or contradicts the sign change: the edge's own
@@ -312,9 +312,7 @@ fn node_seed(phi: &Grid3, pos: [usize; 3]) -> Option<Seed> {
         [0.0; 3]
     };
     let (principal, kappa) = match hess {
-        Some(h) if normal != [0.0; 3] && glen > 0.0 && glen.is_finite() => {
-            principal_curvatures(&h, &normal, glen)
-        }
+        Some(h) if trusted => principal_curvatures(&h, &normal, glen),
         _ => (tangent_basis(&normal).0, [0.0; 2]),
     };
     let mut off = [0.0f32; 3];
