@@ -8,7 +8,8 @@ comes from established libraries:
               Hausdorff distance, triangle areas, vertex components;
 * pymeshlab   topological and geometric measures (boundary edges, holes, non-manifold edges,
               genus, watertightness, enclosed volume) and the hole-closing baseline;
-* manifold3d  an independent verdict on whether the mesh is a closed oriented 2-manifold.
+* manifold3d  an independent verdict on whether the mesh is a closed oriented 2-manifold;
+* scipy       the Euclidean distance transform of a grid's sign mask (the redistancing baseline).
 
 Meshes are read by the small numpy readers below, never by a library that might repair them: STL
 vertices are welded only when their coordinates are bit-for-bit equal (the same rule as
@@ -441,6 +442,56 @@ def hausdorff(VA: np.ndarray, FA: np.ndarray, VB: np.ndarray, FB: np.ndarray) ->
     return {"hausdorff": d, "seconds": seconds}
 
 
+def read_mask(path: str | os.PathLike, dims: tuple[int, int, int]) -> np.ndarray:
+    """Read a raw u8 mask of NX×NY×NZ nodes, x fastest, as a bool array indexed [k, j, i]."""
+    path = Path(path)
+    nx, ny, nz = dims
+    if min(dims) < 1:
+        raise OracleError(f"grid dimensions must be positive, got {nx} {ny} {nz}")
+    try:
+        data = path.read_bytes()
+    except OSError as e:
+        raise OracleError(f"{path}: {e.strerror or e}") from None
+    if len(data) != nx * ny * nz:
+        raise OracleError(
+            f"{path}: {len(data)} bytes for a grid of {nx}×{ny}×{nz} = {nx * ny * nz} nodes"
+        )
+    return np.frombuffer(data, dtype=np.uint8).reshape(nz, ny, nx) != 0
+
+
+def edt(mask: np.ndarray, voxel: float) -> dict:
+    """Signed Euclidean distance transform of a sign mask (True = inside) with
+    scipy.ndimage.distance_transform_edt: outside nodes get +(distance to the nearest inside node),
+    inside nodes −(distance to the nearest outside node), in world units (nodes `voxel` apart).
+
+    It sees only the mask: no sub-voxel position of the interface, so values are quantized to
+    distances between node centres (|error| up to about one voxel next to the interface). Result
+    key "values": the signed distances, same shape and order as the mask.
+    """
+    from scipy import ndimage
+
+    if not (math.isfinite(voxel) and voxel > 0):
+        raise OracleError(f"voxel size must be positive and finite, got {voxel}")
+    t0 = time.perf_counter()
+    outside = ndimage.distance_transform_edt(~mask, sampling=voxel) if mask.any() else None
+    inside = ndimage.distance_transform_edt(mask, sampling=voxel) if not mask.all() else None
+    if outside is None:
+        values = np.full(mask.shape, math.inf)
+    else:
+        values = outside
+    if inside is None:
+        values = np.where(mask, -math.inf, values)
+    else:
+        values = values - inside
+    seconds = time.perf_counter() - t0
+    return {
+        "n": int(mask.size),
+        "inside": int(np.count_nonzero(mask)),
+        "values": np.asarray(values, np.float64),
+        "seconds": seconds,
+    }
+
+
 def close_holes(V: np.ndarray, F: np.ndarray, max_hole_size: int | None = None) -> dict:
     """pymeshlab `meshing_close_holes` (MeshLab's hole filling) with its other defaults.
 
@@ -619,6 +670,11 @@ def _run(args: argparse.Namespace) -> dict:
         return res
     if cmd == "hausdorff":
         return hausdorff(*load_mesh(args.a), *load_mesh(args.b))
+    if cmd == "edt":
+        mask = read_mask(args.mask, (args.nx, args.ny, args.nz))
+        res = edt(mask, args.voxel)
+        write_f64(args.out, res["values"])
+        return res
     if cmd == "close_holes":
         if args.max_hole_size is not None and args.max_hole_size < 3:
             raise OracleError("--max-hole-size must be at least 3")
@@ -665,6 +721,15 @@ def _parser() -> argparse.ArgumentParser:
     s = sub.add_parser("hausdorff", help="libigl Hausdorff distance between two meshes")
     s.add_argument("a")
     s.add_argument("b")
+    s = sub.add_parser(
+        "edt", help="signed scipy distance_transform_edt of a u8 sign mask (1 = inside)"
+    )
+    s.add_argument("mask", help="NX×NY×NZ raw u8, x fastest, nonzero = inside")
+    s.add_argument("nx", type=int)
+    s.add_argument("ny", type=int)
+    s.add_argument("nz", type=int)
+    s.add_argument("voxel", type=float, help="node spacing, world units")
+    s.add_argument("out", help="output: NX×NY×NZ signed distances, raw little-endian float64")
     s = sub.add_parser("close_holes", help="pymeshlab hole closing (baseline)")
     s.add_argument("mesh")
     s.add_argument("out", help="output mesh (.stl, .obj or .ply)")

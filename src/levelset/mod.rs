@@ -1,8 +1,10 @@
 //! The level-set core: the function φ (negative inside) on a [`crate::grid::Grid3`], as the
 //! level-set multiscale representation of Dong, Chien, Shen and Osher works on it, and the
 //! bridges between φ and triangle meshes: `voxelize` (mesh → φ), `redistance` (fast sweeping
-//! back to a signed distance function) and `marching_cubes` (φ → closed mesh).
+//! back to a signed distance function), `marching_cubes` (φ → closed mesh) and `project`
+//! (extracted vertices onto the input surface).
 
 pub mod marching_cubes;
 pub mod project;
+pub mod redistance;
 pub mod voxelize;
