@@ -118,3 +118,99 @@ fn remesh_refuses_bad_grids_and_meshes_without_inside() {
         &out,
     );
 }
+
+#[test]
+fn voxelize_writes_a_signed_distance_grid_as_npy_and_vti() {
+    use rand::RngExt;
+    use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
+    let tmp = tempfile::tempdir().unwrap();
+    let npy = tmp.path().join("phi.npy");
+    let vti = tmp.path().join("phi.VTI");
+    let report = vesselmsr_json(&[
+        "--json",
+        "voxelize",
+        &aorta(),
+        "-o",
+        npy.to_str().unwrap(),
+        "--resolution",
+        "80",
+    ]);
+    vesselmsr_json(&[
+        "--json",
+        "voxelize",
+        &aorta(),
+        "-o",
+        vti.to_str().unwrap(),
+        "--resolution",
+        "80",
+    ]);
+    let phi = vesselmsr::io::read_npy(&npy).unwrap();
+    assert_eq!(
+        phi,
+        vesselmsr::io::read_vti(&vti).unwrap(),
+        "the two formats hold the same grid"
+    );
+    let dims: Vec<usize> = report["grid"]["dims"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_u64().unwrap() as usize)
+        .collect();
+    assert_eq!(phi.dims().to_vec(), dims);
+    assert_eq!(phi.voxel(), report["grid"]["voxel"].as_f64().unwrap());
+    let inside = phi.data().iter().filter(|&&v| v < 0.0).count();
+    assert_eq!(inside as u64, report["inside_nodes"].as_u64().unwrap());
+
+    // In the band |φ| is the exact distance to the triangles, and the sign is the winding
+    // number's (checked where |w| is not within 0.05 of ½, i.e. away from open ends).
+    let mesh = vesselmsr::io::read_mesh(Path::new(&aorta())).unwrap();
+    let bvh = MeshBvh::new(&mesh);
+    let wn = WindingNumber::new(&mesh, WindingOptions::default());
+    let h = phi.voxel();
+    let mut rng = rng(5);
+    let (mut worst_band, mut checked) = (0.0f64, 0);
+    for _ in 0..4000 {
+        let [nx, ny, nz] = phi.dims();
+        let (i, j, k) = (
+            rng.random_range(0..nx),
+            rng.random_range(0..ny),
+            rng.random_range(0..nz),
+        );
+        let (p, value) = (phi.world(i, j, k), phi.get(i, j, k) as f64);
+        let d = bvh.closest_point(&p).distance;
+        if d < 2.5 * h {
+            worst_band = worst_band.max((value.abs() - d).abs() / h);
+            checked += 1;
+            if (wn.winding_number(&p).abs() - 0.5).abs() > 0.05 {
+                assert_eq!(
+                    value < 0.0,
+                    wn.is_inside(&p) || wn.winding_number(&p) <= -0.5,
+                    "sign at {p:?}"
+                );
+            }
+        }
+    }
+    println!("{checked} band nodes: max ||φ| − d| = {worst_band:.2e} h");
+    assert!(
+        checked > 50 && worst_band < 1e-4,
+        "band values differ from exact distances by {worst_band} h"
+    );
+}
+
+#[test]
+fn voxelize_refuses_unknown_grid_formats() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("phi.nii");
+    assert_fails(
+        &[
+            "voxelize",
+            &aorta(),
+            "-o",
+            out.to_str().unwrap(),
+            "--resolution",
+            "32",
+        ],
+        ".npy or .vti",
+        &out,
+    );
+}

@@ -8,6 +8,7 @@ mod grid_args;
 mod info;
 mod progress;
 mod remesh;
+mod voxelize;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -44,6 +45,9 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Signed distance grid φ of a mesh (negative inside), written as .npy (+ .npy.json sidecar)
     /// or .vti.
+    /// Signed distance grid φ of a mesh (negative inside), written as .npy (+ .npy.json sidecar)
+    /// or .vti.
+    Voxelize(voxelize::VoxelizeArgs),
     /// Mesh → signed distance grid → marching cubes: a closed, manifold, outward mesh.
     Remesh(remesh::RemeshArgs),
 }
@@ -87,6 +91,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Info { mesh } => info::run(&ctx, &mesh),
         Command::Cap(args) => cap::run(&ctx, &args),
         Command::Compare(args) => compare::run(&ctx, &args),
+        Command::Voxelize(args) => voxelize::run(&ctx, &args),
         Command::Remesh(args) => remesh::run(&ctx, &args),
     }
 }
