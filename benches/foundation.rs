@@ -6,10 +6,12 @@
 //! Run: `cargo bench --bench foundation` (the reference side needs reference/.venv, which
 //! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON).
 
+mod common;
+
+use common::{seconds, time_median, write_points, Reference};
 use nalgebra::{Point3, Vector3};
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::time::{Duration, Instant};
+use std::path::Path;
+use std::time::Duration;
 use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
 use vesselmsr::io::read_mesh;
 use vesselmsr::mesh::cap::{cap_holes, CapOptions};
@@ -18,16 +20,8 @@ use vesselmsr::mesh::measures::mean_edge_length;
 use vesselmsr::TriMesh;
 
 /// Median wall time of `f` over repeated runs (at least 3, about half a second in all).
-fn time<T>(mut f: impl FnMut() -> T) -> Duration {
-    let mut times = Vec::new();
-    let start = Instant::now();
-    while times.len() < 3 || (start.elapsed() < Duration::from_millis(500) && times.len() < 200) {
-        let t = Instant::now();
-        std::hint::black_box(f());
-        times.push(t.elapsed());
-    }
-    times.sort();
-    times[times.len() / 2]
+fn time<T>(f: impl FnMut() -> T) -> Duration {
+    time_median(3, 200, Duration::from_millis(500), f).0
 }
 
 /// Query points: every other one near the surface (within two mean edges), the rest uniform in
@@ -61,58 +55,23 @@ fn query_points(mesh: &TriMesh, n: usize) -> Vec<Point3<f64>> {
         .collect()
 }
 
-struct Reference {
-    python: PathBuf,
-    script: PathBuf,
-}
-
-impl Reference {
-    fn find(root: &Path) -> Option<Reference> {
-        let python = std::env::var_os("VESSELMSR_PYTHON")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| root.join("reference/.venv/bin/python"));
-        python.exists().then(|| Reference {
-            python,
-            script: root.join("reference/oracle.py"),
-        })
-    }
-
-    /// The oracle's own timing ("seconds": the computation only, not Python start-up or loading).
-    fn seconds(&self, args: &[&std::ffi::OsStr]) -> Option<f64> {
-        let out = Command::new(&self.python)
-            .arg(&self.script)
-            .args(args)
-            .output()
-            .ok()?;
-        if !out.status.success() {
-            eprintln!("reference failed: {}", String::from_utf8_lossy(&out.stderr));
-            return None;
-        }
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).ok()?;
-        v["seconds"].as_f64()
-    }
-
-    fn query_seconds(&self, command: &str, mesh: &Path, points: &[Point3<f64>]) -> Option<f64> {
-        let dir = tempfile::tempdir().ok()?;
-        let (input, output) = (dir.path().join("p.f64"), dir.path().join("o.f64"));
-        let bytes: Vec<u8> = points
-            .iter()
-            .flat_map(|p| [p.x, p.y, p.z])
-            .flat_map(f64::to_le_bytes)
-            .collect();
-        std::fs::write(&input, bytes).ok()?;
-        // Best of three, as our side takes a median of several runs.
-        (0..3)
-            .filter_map(|_| {
-                self.seconds(&[
-                    command.as_ref(),
-                    mesh.as_os_str(),
-                    input.as_os_str(),
-                    output.as_os_str(),
-                ])
-            })
-            .reduce(f64::min)
-    }
+/// The oracle's best of three (as our side takes a median of several runs) on a per-point query.
+fn query_seconds(
+    reference: &Reference,
+    command: &str,
+    mesh: &Path,
+    points: &[Point3<f64>],
+) -> Option<f64> {
+    let dir = tempfile::tempdir().ok()?;
+    let input = write_points(dir.path(), points)?;
+    let output = dir.path().join("o.f64");
+    let args = [
+        command.as_ref(),
+        mesh.as_os_str(),
+        input.as_os_str(),
+        output.as_os_str(),
+    ];
+    seconds(&reference.best_of(3, &args)?)
 }
 
 fn row(what: &str, count: usize, ours: Duration, reference: Option<f64>) {
@@ -131,13 +90,10 @@ fn row(what: &str, count: usize, ours: Duration, reference: Option<f64>) {
 }
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let cortex_path = root.join("data/cortex_rh_pial_fsaverage5.stl");
     let aorta_path = root.join("data/aorta_abdominal_open_ends.stl");
-    let reference = Reference::find(root);
-    if reference.is_none() {
-        println!("notice: reference/.venv not found: reference timings skipped (bash tests/run_all.sh creates it)");
-    }
+    let reference = Reference::find_or_notice("reference timings");
     println!(
         "vesselmsr foundation benchmark ({} rayon threads)",
         rayon::current_num_threads()
@@ -196,7 +152,7 @@ fn main() {
     let bvh = MeshBvh::new(&cortex);
     let r = reference
         .as_ref()
-        .and_then(|r| r.query_seconds("closest", &cortex_path, &points));
+        .and_then(|r| query_seconds(r, "closest", &cortex_path, &points));
     row(
         "closest point, 100k points (queries/s)",
         points.len(),
@@ -206,7 +162,7 @@ fn main() {
     let wn = WindingNumber::new(&cortex, WindingOptions::default());
     let r = reference
         .as_ref()
-        .and_then(|r| r.query_seconds("winding", &cortex_path, &points));
+        .and_then(|r| query_seconds(r, "winding", &cortex_path, &points));
     row(
         "winding number, default (±1e-4), 100k points (queries/s)",
         points.len(),

@@ -9,11 +9,13 @@
 //! Run: `cargo bench --bench marching_cubes` (the reference side needs reference/.venv, which
 //! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON).
 
+mod common;
+
+use common::{seconds, time_median, Reference};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::time::{Duration, Instant};
+use std::ffi::{OsStr, OsString};
+use std::time::Duration;
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use vesselmsr::mesh::info::mesh_info;
@@ -21,16 +23,8 @@ use vesselmsr::mesh::info::mesh_info;
 const N: usize = 256;
 
 /// Median wall time of `f` over repeated runs (at least 5, about two seconds in all).
-fn time<T>(mut f: impl FnMut() -> T) -> Duration {
-    let mut times = Vec::new();
-    let start = Instant::now();
-    while times.len() < 5 || (start.elapsed() < Duration::from_secs(2) && times.len() < 100) {
-        let t = Instant::now();
-        std::hint::black_box(f());
-        times.push(t.elapsed());
-    }
-    times.sort();
-    times[times.len() / 2]
+fn time<T>(f: impl FnMut() -> T) -> Duration {
+    time_median(5, 100, Duration::from_secs(2), f).0
 }
 
 /// φ = f(world position) on an N³ grid over [−1, 1]³, filled in parallel.
@@ -52,71 +46,35 @@ fn grid(f: impl Fn(Point3<f64>) -> f64 + Sync) -> Grid3 {
     g
 }
 
-struct Reference {
-    python: PathBuf,
-    script: PathBuf,
-}
-
-impl Reference {
-    fn find(root: &Path) -> Option<Reference> {
-        let python = std::env::var_os("VESSELMSR_PYTHON")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| root.join("reference/.venv/bin/python"));
-        python.exists().then(|| Reference {
-            python,
-            script: root.join("reference/oracle.py"),
-        })
-    }
-
-    /// libigl's marching cubes on the grid's values: (best of three "seconds", faces).
-    fn marching_cubes(&self, g: &Grid3) -> Option<(f64, u64)> {
-        let dir = tempfile::tempdir().ok()?;
-        let (grid, out) = (dir.path().join("phi.f64"), dir.path().join("mc.ply"));
-        let bytes: Vec<u8> = g
-            .data()
-            .iter()
-            .flat_map(|&v| (v as f64).to_le_bytes())
-            .collect();
-        std::fs::write(&grid, bytes).ok()?;
-        let [nx, ny, nz] = g.dims();
-        let o = g.transform().origin;
-        let args: Vec<String> = [nx, ny, nz]
-            .iter()
-            .map(|d| d.to_string())
-            // plain decimals: argparse takes "-1e0" for an option, "-1" for a number
-            .chain(o.iter().map(|x| format!("{x}")))
-            .chain([format!("{}", g.voxel())])
-            .collect();
-        let mut best: Option<(f64, u64)> = None;
-        for _ in 0..3 {
-            let run = Command::new(&self.python)
-                .arg(&self.script)
-                .arg("marching_cubes")
-                .arg(&grid)
-                .args(&args)
-                .arg(&out)
-                .output()
-                .ok()?;
-            if !run.status.success() {
-                eprintln!("reference failed: {}", String::from_utf8_lossy(&run.stderr));
-                return None;
-            }
-            let v: serde_json::Value = serde_json::from_slice(&run.stdout).ok()?;
-            let (s, f) = (v["seconds"].as_f64()?, v["faces"].as_u64()?);
-            if best.is_none_or(|(b, _)| s < b) {
-                best = Some((s, f));
-            }
-        }
-        best
-    }
+/// libigl's marching cubes on the grid's values: (best of three "seconds", faces).
+fn libigl_marching_cubes(reference: &Reference, g: &Grid3) -> Option<(f64, u64)> {
+    let dir = tempfile::tempdir().ok()?;
+    let (grid, out) = (dir.path().join("phi.f64"), dir.path().join("mc.ply"));
+    let bytes: Vec<u8> = g
+        .data()
+        .iter()
+        .flat_map(|&v| (v as f64).to_le_bytes())
+        .collect();
+    std::fs::write(&grid, bytes).ok()?;
+    let [nx, ny, nz] = g.dims();
+    let o = g.transform().origin;
+    let numbers: Vec<OsString> = [nx, ny, nz]
+        .iter()
+        .map(|d| d.to_string())
+        // plain decimals: argparse takes "-1e0" for an option, "-1" for a number
+        .chain(o.iter().map(|x| format!("{x}")))
+        .chain([format!("{}", g.voxel())])
+        .map(OsString::from)
+        .collect();
+    let mut args: Vec<&OsStr> = vec!["marching_cubes".as_ref(), grid.as_os_str()];
+    args.extend(numbers.iter().map(OsString::as_os_str));
+    args.push(out.as_os_str());
+    let best = reference.best_of(3, &args)?;
+    Some((seconds(&best)?, best["faces"].as_u64()?))
 }
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let reference = Reference::find(root);
-    if reference.is_none() {
-        println!("notice: reference/.venv not found: libigl timings skipped (bash tests/run_all.sh creates it)");
-    }
+    let reference = Reference::find_or_notice("libigl timings");
     println!(
         "marching cubes on {N}³ grids ({} rayon threads); ratio = libigl seconds / ours",
         rayon::current_num_threads()
@@ -143,7 +101,7 @@ fn main() {
             .fold(f64::INFINITY, f64::min)
     });
     for (name, g) in [("torus", &torus), ("12 spheres", &spheres)] {
-        let igl = reference.as_ref().and_then(|r| r.marching_cubes(g));
+        let igl = reference.as_ref().and_then(|r| libigl_marching_cubes(r, g));
         for (label, collapse_below) in [("default (collapse 0.1)", 0.1), ("collapse off", 0.0)] {
             let opts = ExtractOptions { collapse_below };
             let mesh = extract_surface(g, &opts).expect("extract");

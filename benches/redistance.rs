@@ -12,85 +12,53 @@
 //! Run: `cargo bench --bench redistance` (the reference side needs reference/.venv, which
 //! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON).
 
+mod common;
+
+use common::{read_f64s, seconds, time_median_with_setup, Reference};
 use nalgebra::Point3;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::time::{Duration, Instant};
+use std::ffi::OsString;
+use std::time::Duration;
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::levelset::redistance::{redistance, RedistanceOptions, RedistanceScheme};
 
 const N: usize = 256;
 
-/// Median wall time of `run` over 3 runs, each on a fresh copy of `phi0` (the copy not timed).
+/// Median wall time of `redistance` over 3 runs, each on a fresh copy of `phi0` (the copy not
+/// timed), with the last result and its sweep count.
 fn time_redistance(phi0: &Grid3, opts: &RedistanceOptions) -> (Duration, Grid3, usize) {
-    let mut times = Vec::new();
-    let mut last = None;
-    let mut sweeps = 0;
-    for _ in 0..3 {
-        let mut g = phi0.clone();
-        let t = Instant::now();
-        let report = redistance(&mut g, opts).expect("redistance runs");
-        times.push(t.elapsed());
-        sweeps = report.sweeps;
-        last = Some(g);
-    }
-    times.sort();
-    (times[1], last.unwrap(), sweeps)
+    let (t, (g, sweeps)) = time_median_with_setup(
+        3,
+        3,
+        Duration::ZERO,
+        || phi0.clone(),
+        |mut g| {
+            let report = redistance(&mut g, opts).expect("redistance runs");
+            (g, report.sweeps)
+        },
+    );
+    (t, g, sweeps)
 }
 
-struct Reference {
-    python: PathBuf,
-    script: PathBuf,
-}
-
-impl Reference {
-    fn find(root: &Path) -> Option<Reference> {
-        let python = std::env::var_os("VESSELMSR_PYTHON")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| root.join("reference/.venv/bin/python"));
-        python.exists().then(|| Reference {
-            python,
-            script: root.join("reference/oracle.py"),
-        })
-    }
-
-    /// scipy's signed EDT of the sign mask of `phi0`: best "seconds" of three runs and the values.
-    fn edt(&self, phi0: &Grid3) -> Option<(f64, Vec<f64>)> {
-        let dir = tempfile::tempdir().ok()?;
-        let (mask, out) = (dir.path().join("mask.u8"), dir.path().join("edt.f64"));
-        let bytes: Vec<u8> = phi0.data().iter().map(|&v| u8::from(v < 0.0)).collect();
-        std::fs::write(&mask, bytes).ok()?;
-        let [nx, ny, nz] = phi0.dims();
-        let args = [
-            "edt".to_string(),
-            mask.display().to_string(),
-            nx.to_string(),
-            ny.to_string(),
-            nz.to_string(),
-            phi0.voxel().to_string(),
-            out.display().to_string(),
-        ];
-        let mut best = f64::INFINITY;
-        for _ in 0..3 {
-            let o = Command::new(&self.python)
-                .arg(&self.script)
-                .args(&args)
-                .output()
-                .ok()?;
-            if !o.status.success() {
-                eprintln!("reference failed: {}", String::from_utf8_lossy(&o.stderr));
-                return None;
-            }
-            let v: serde_json::Value = serde_json::from_slice(&o.stdout).ok()?;
-            best = best.min(v["seconds"].as_f64()?);
-        }
-        let raw = std::fs::read(&out).ok()?;
-        let values = raw
-            .chunks_exact(8)
-            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-            .collect();
-        Some((best, values))
-    }
+/// scipy's signed EDT of the sign mask of `phi0`: best "seconds" of three runs and the values.
+fn scipy_edt(reference: &Reference, phi0: &Grid3) -> Option<(f64, Vec<f64>)> {
+    let dir = tempfile::tempdir().ok()?;
+    let (mask, out) = (dir.path().join("mask.u8"), dir.path().join("edt.f64"));
+    let bytes: Vec<u8> = phi0.data().iter().map(|&v| u8::from(v < 0.0)).collect();
+    std::fs::write(&mask, bytes).ok()?;
+    let [nx, ny, nz] = phi0.dims();
+    let numbers = [nx, ny, nz].map(|d| OsString::from(d.to_string()));
+    let voxel = OsString::from(phi0.voxel().to_string());
+    let args = [
+        "edt".as_ref(),
+        mask.as_os_str(),
+        &numbers[0],
+        &numbers[1],
+        &numbers[2],
+        &voxel,
+        out.as_os_str(),
+    ];
+    let best = seconds(&reference.best_of(3, &args)?)?;
+    Some((best, read_f64s(&out)?))
 }
 
 /// A 256³ grid of unit voxels sampled from `f`.
@@ -125,11 +93,7 @@ fn accuracy(values: impl Iterator<Item = f64>, exact: &[f64], band: f64) -> (f64
 }
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let reference = Reference::find(root);
-    if reference.is_none() {
-        println!("notice: reference/.venv not found: reference timings skipped (bash tests/run_all.sh creates it)");
-    }
+    let reference = Reference::find_or_notice("reference timings");
     println!(
         "vesselmsr redistance benchmark, {N}³ grid ({} rayon threads); ratio = reference seconds / ours",
         rayon::current_num_threads()
@@ -165,7 +129,7 @@ fn main() {
                 exact_fn(&phi0.world(i, j, k))
             })
             .collect();
-        let edt = reference.as_ref().and_then(|r| r.edt(&phi0));
+        let edt = reference.as_ref().and_then(|r| scipy_edt(r, &phi0));
         if let Some((_, values)) = &edt {
             let (max, mean) = accuracy(values.iter().copied(), &exact, band);
             println!(

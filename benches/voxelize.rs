@@ -11,10 +11,12 @@
 //! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON). `VOXELIZE_BENCH_CELLS=N` changes the
 //! 256 cells along the longest axis.
 
+mod common;
+
+use common::{read_f64s, seconds, time_median, write_points, Reference};
 use nalgebra::Point3;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::time::{Duration, Instant};
+use std::path::Path;
+use std::time::Duration;
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::io::read_mesh;
 use vesselmsr::levelset::voxelize::{voxelize_with_report, FarFill, VoxelizeOptions};
@@ -22,16 +24,8 @@ use vesselmsr::mesh::measures::{bounding_box, mean_edge_length};
 use vesselmsr::TriMesh;
 
 /// Median wall time of `f` over `runs` runs, with the last result.
-fn time<T>(runs: usize, mut f: impl FnMut() -> T) -> (Duration, T) {
-    let mut times = Vec::new();
-    let mut last = None;
-    for _ in 0..runs {
-        let t = Instant::now();
-        last = Some(std::hint::black_box(f()));
-        times.push(t.elapsed());
-    }
-    times.sort();
-    (times[times.len() / 2], last.unwrap())
+fn time<T>(runs: usize, f: impl FnMut() -> T) -> (Duration, T) {
+    time_median(runs, runs, Duration::ZERO, f)
 }
 
 /// The default grid of the issue: h = min(mean edge / 2, longest extent / cells), the bounding box
@@ -46,57 +40,31 @@ fn default_layout(mesh: &TriMesh, cells: f64) -> ([usize; 3], GridTransform) {
     (dims, GridTransform::new(origin, h))
 }
 
-fn python(root: &Path) -> Option<PathBuf> {
-    let python = std::env::var_os("VESSELMSR_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("reference/.venv/bin/python"));
-    python.exists().then_some(python)
-}
-
 /// libigl signed distance at `points`: (values, seconds of computation).
 fn libigl_signed_distance(
-    python: &Path,
-    root: &Path,
+    reference: &Reference,
     mesh: &Path,
     points: &[Point3<f64>],
 ) -> Option<(Vec<f64>, f64)> {
     let dir = tempfile::tempdir().ok()?;
-    let (input, output) = (dir.path().join("p.f64"), dir.path().join("o.f64"));
-    let bytes: Vec<u8> = points
-        .iter()
-        .flat_map(|p| [p.x, p.y, p.z])
-        .flat_map(f64::to_le_bytes)
-        .collect();
-    std::fs::write(&input, bytes).ok()?;
-    let out = Command::new(python)
-        .arg(root.join("reference/oracle.py"))
-        .args(["signed_distance".as_ref(), mesh.as_os_str()])
-        .args([input.as_os_str(), output.as_os_str()])
-        .output()
-        .ok()?;
-    if !out.status.success() {
-        eprintln!("reference failed: {}", String::from_utf8_lossy(&out.stderr));
-        return None;
-    }
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).ok()?;
-    let values = std::fs::read(&output)
-        .ok()?
-        .chunks_exact(8)
-        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    Some((values, v["seconds"].as_f64()?))
+    let input = write_points(dir.path(), points)?;
+    let output = dir.path().join("o.f64");
+    let answer = reference.run(&[
+        "signed_distance".as_ref(),
+        mesh.as_os_str(),
+        input.as_os_str(),
+        output.as_os_str(),
+    ])?;
+    Some((read_f64s(&output)?, seconds(&answer)?))
 }
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = common::root();
     let cells: f64 = std::env::var("VOXELIZE_BENCH_CELLS")
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(256.0);
-    let python = python(root);
-    if python.is_none() {
-        println!("notice: reference/.venv not found: libigl timings skipped (bash tests/run_all.sh creates it)");
-    }
+    let reference = Reference::find_or_notice("libigl timings");
     println!(
         "vesselmsr voxelize benchmark ({} rayon threads)",
         rayon::current_num_threads()
@@ -105,11 +73,11 @@ fn main() {
         ("cortex (closed)", "data/cortex_rh_pial_fsaverage5.stl"),
         ("aorta (open ends)", "data/aorta_abdominal_open_ends.stl"),
     ] {
-        bench_mesh(root, python.as_deref(), name, &root.join(file), cells);
+        bench_mesh(reference.as_ref(), name, &root.join(file), cells);
     }
 }
 
-fn bench_mesh(root: &Path, python: Option<&Path>, name: &str, path: &Path, cells: f64) {
+fn bench_mesh(reference: Option<&Reference>, name: &str, path: &Path, cells: f64) {
     let mesh = read_mesh(path).expect("data/ mesh reads");
     let (dims, transform) = default_layout(&mesh, cells);
     let n = dims.iter().product::<usize>();
@@ -161,13 +129,13 @@ fn bench_mesh(root: &Path, python: Option<&Path>, name: &str, path: &Path, cells
         rep.seconds_far
     );
 
-    let Some(python) = python else { return };
+    let Some(reference) = reference else { return };
     let world = |idx: usize| {
         let [i, j, k] = phi_all.coords(idx);
         phi_all.world(i, j, k)
     };
     let points: Vec<Point3<f64>> = (0..n).map(world).collect();
-    let Some((igl, t_igl)) = libigl_signed_distance(python, root, path, &points) else {
+    let Some((igl, t_igl)) = libigl_signed_distance(reference, path, &points) else {
         return;
     };
     let bw = band.band * transform.voxel;
@@ -175,7 +143,7 @@ fn bench_mesh(root: &Path, python: Option<&Path>, name: &str, path: &Path, cells
         .filter(|&i| (phi_band.data()[i].abs() as f64) < bw)
         .map(world)
         .collect();
-    let t_igl_band = libigl_signed_distance(python, root, path, &band_points).map(|(_, t)| t);
+    let t_igl_band = libigl_signed_distance(reference, path, &band_points).map(|(_, t)| t);
     println!("libigl signed_distance (fast winding number), all {n} nodes: {t_igl:.3} s");
     println!(
         "ratio libigl(all nodes) / ours(band only) = {:.2}×",

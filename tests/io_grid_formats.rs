@@ -8,25 +8,10 @@ use common::*;
 use nalgebra::Point3;
 use rand::RngExt;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::io::{npy_sidecar_path, read_npy, read_vti, write_npy, write_vti};
-
-/// The oracle's Python, found as `common::oracle()` finds it ($VESSELMSR_PYTHON, else
-/// reference/.venv); panics with the same instructions when neither exists.
-fn python() -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let python = std::env::var_os("VESSELMSR_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("reference/.venv/bin/python"));
-    assert!(
-        python.exists(),
-        "the Python reference oracle is not installed ({}): run `bash tests/run_all.sh`, which creates it",
-        python.display()
-    );
-    python
-}
 
 /// Runs `script` with the oracle's Python and `args`, returning its stdout parsed as JSON.
 fn run_python(script: &str, args: &[&Path]) -> Value {

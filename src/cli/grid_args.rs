@@ -1,7 +1,16 @@
 //! The grid flags shared by the level-set commands (`voxelize`, `remesh`): voxel size or
-//! resolution, and the memory limit.
+//! resolution, and the memory limit; and the first steps both commands take with them (read the
+//! mesh, size its grid, voxelize it).
 
+use super::{progress, Context};
 use crate::grid::spec::{parse_memory_size, GridOptions, DEFAULT_MAX_MEMORY_BYTES};
+use crate::grid::{grid_for_mesh, Grid3, GridSpec};
+use crate::io::read_mesh;
+use crate::levelset::voxelize::{voxelize_with_report, VoxelizeOptions, VoxelizeReport};
+use crate::TriMesh;
+use indicatif::ProgressBar;
+use std::path::Path;
+use std::time::Instant;
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct GridArgs {
@@ -49,4 +58,53 @@ impl GridJson {
             origin: spec.transform.origin,
         }
     }
+}
+
+/// A mesh read and voxelized on the grid its flags ask for, with the spinner still running.
+pub struct Voxelized {
+    pub mesh: TriMesh,
+    pub spec: GridSpec,
+    /// φ from `voxelize` with the default options (exact within the band, clamped beyond).
+    pub phi: Grid3,
+    pub report: VoxelizeReport,
+    /// Seconds spent reading the mesh.
+    pub read_s: f64,
+    /// Seconds spent voxelizing.
+    pub voxelize_s: f64,
+    /// The "voxelizing" spinner, for the caller's next steps.
+    pub bar: ProgressBar,
+}
+
+/// Reads `mesh_path`, sizes its grid from `grid` (errors name the file) and voxelizes it under a
+/// "voxelizing" spinner, timing the read and the voxelization.
+pub fn load_and_voxelize(
+    ctx: &Context,
+    mesh_path: &Path,
+    grid: &GridArgs,
+) -> anyhow::Result<Voxelized> {
+    let grid_opts = grid.options()?;
+    let t = Instant::now();
+    let mesh = read_mesh(mesh_path)?;
+    let read_s = t.elapsed().as_secs_f64();
+    let spec = grid_for_mesh(&mesh, &grid_opts)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", mesh_path.display()))?;
+    let bar = progress::spinner(ctx.quiet, "voxelizing");
+    let t = Instant::now();
+    let (phi, report) = voxelize_with_report(
+        &mesh,
+        spec.dims,
+        spec.transform,
+        &VoxelizeOptions::default(),
+    )
+    .map_err(|e| anyhow::anyhow!("{}: {e}", mesh_path.display()))?;
+    let voxelize_s = t.elapsed().as_secs_f64();
+    Ok(Voxelized {
+        mesh,
+        spec,
+        phi,
+        report,
+        read_s,
+        voxelize_s,
+        bar,
+    })
 }

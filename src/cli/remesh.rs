@@ -2,14 +2,12 @@
 //! cubes, vertices then projected onto the input: a closed, manifold, outward mesh at the
 //! grid's resolution (open ends come out closed).
 
-use super::grid_args::{GridArgs, GridJson};
-use super::{print_json, progress, Context};
+use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::{print_json, Context};
 use crate::bvh::MeshBvh;
-use crate::grid::grid_for_mesh;
-use crate::io::{read_mesh, write_mesh, MeshFormat};
+use crate::io::{write_mesh, MeshFormat};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::project::{project_vertices, ProjectOptions};
-use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
 use crate::mesh::info::{mesh_info, MeshInfo};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -47,23 +45,16 @@ struct RemeshOutput {
 
 pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
     MeshFormat::from_path(&args.output)?;
-    let grid_opts = args.grid.options()?;
-    let t = Instant::now();
-    let mesh = read_mesh(&args.mesh)?;
-    let read = t.elapsed().as_secs_f64();
-    let spec = grid_for_mesh(&mesh, &grid_opts)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
-    let bar = progress::spinner(ctx.quiet, "voxelizing");
-    let t = Instant::now();
     // Marching cubes reads φ only next to its zero level set: the narrow band is enough.
-    let phi = voxelize(
-        &mesh,
-        spec.dims,
-        spec.transform,
-        &VoxelizeOptions::default(),
-    )
-    .map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
-    let voxelize_s = t.elapsed().as_secs_f64();
+    let Voxelized {
+        mesh,
+        spec,
+        phi,
+        read_s: read,
+        voxelize_s,
+        bar,
+        ..
+    } = load_and_voxelize(ctx, &args.mesh, &args.grid)?;
     bar.set_message("extracting the surface");
     let t = Instant::now();
     let mut surface = extract_surface(&phi, &ExtractOptions::default())?;

@@ -1,12 +1,11 @@
 //! `vesselmsr voxelize MESH -o PHI.npy|PHI.vti`: the signed distance grid φ of a mesh (negative
 //! inside), exact near the surface and redistanced by fast sweeping elsewhere.
 
-use super::grid_args::{GridArgs, GridJson};
-use super::{print_json, progress, Context};
-use crate::grid::grid_for_mesh;
-use crate::io::{read_mesh, write_npy, write_vti};
+use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::{print_json, Context};
+use crate::io::{write_npy, write_vti};
 use crate::levelset::redistance::{redistance, RedistanceOptions};
-use crate::levelset::voxelize::{voxelize_with_report, VoxelizeOptions};
+use crate::levelset::voxelize::VoxelizeOptions;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -61,22 +60,15 @@ struct VoxelizeOutput {
 
 pub fn run(ctx: &Context, args: &VoxelizeArgs) -> anyhow::Result<()> {
     let format = grid_format(&args.output)?;
-    let grid_opts = args.grid.options()?;
-    let t = Instant::now();
-    let mesh = read_mesh(&args.mesh)?;
-    let read = t.elapsed().as_secs_f64();
-    let spec = grid_for_mesh(&mesh, &grid_opts)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
-    let bar = progress::spinner(ctx.quiet, "voxelizing");
-    let t = Instant::now();
-    let (mut phi, report) = voxelize_with_report(
-        &mesh,
-        spec.dims,
-        spec.transform,
-        &VoxelizeOptions::default(),
-    )
-    .map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
-    let voxelize_s = t.elapsed().as_secs_f64();
+    let Voxelized {
+        spec,
+        mut phi,
+        report,
+        read_s: read,
+        voxelize_s,
+        bar,
+        ..
+    } = load_and_voxelize(ctx, &args.mesh, &args.grid)?;
     bar.set_message("redistancing");
     let t = Instant::now();
     // Fast sweeping fills the values beyond the band; the band keeps voxelize's exact

@@ -106,21 +106,27 @@ pub struct Oracle {
     script: PathBuf,
 }
 
-/// The oracle, from $VESSELMSR_PYTHON or reference/.venv. Panics with instructions when neither
-/// exists: the oracle tests are part of the suite, `bash tests/run_all.sh` creates the venv.
-pub fn oracle() -> Oracle {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+/// The oracle's Python, from $VESSELMSR_PYTHON or reference/.venv. Panics with instructions when
+/// neither exists: the oracle tests are part of the suite, `bash tests/run_all.sh` creates the venv.
+pub fn python() -> PathBuf {
     let python = std::env::var_os("VESSELMSR_PYTHON")
         .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("reference/.venv/bin/python"));
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("reference/.venv/bin/python")
+        });
     assert!(
         python.exists(),
         "the Python reference oracle is not installed ({}): run `bash tests/run_all.sh`, which creates it",
         python.display()
     );
+    python
+}
+
+/// The oracle, run with [`python`] (which panics with instructions when it is missing).
+pub fn oracle() -> Oracle {
     Oracle {
-        python,
-        script: root.join("reference/oracle.py"),
+        python: python(),
+        script: Path::new(env!("CARGO_MANIFEST_DIR")).join("reference/oracle.py"),
     }
 }
 
