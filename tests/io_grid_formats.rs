@@ -8,17 +8,17 @@ use common::*;
 use nalgebra::Point3;
 use rand::RngExt;
 use serde_json::Value;
-use std::path::Path;
+use std::ffi::OsStr;
 use std::process::Command;
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::io::{npy_sidecar_path, read_npy, read_vti, write_npy, write_vti};
 
 /// Runs `script` with the oracle's Python and `args`, returning its stdout parsed as JSON.
-fn run_python(script: &str, args: &[&Path]) -> Value {
+fn run_python(script: &str, args: &[&dyn AsRef<OsStr>]) -> Value {
     let out = Command::new(python())
         .arg("-c")
         .arg(script)
-        .args(args)
+        .args(args.iter().map(|a| a.as_ref()))
         .output()
         .expect("python runs");
     assert!(
@@ -98,19 +98,7 @@ fn npy_round_trips_and_numpy_reads_it_as_k_j_i() {
 
     let probes = probe_nodes(g.dims());
     let probes_json = serde_json::to_string(&probes).unwrap();
-    let out = Command::new(python())
-        .arg("-c")
-        .arg(NP_LOAD)
-        .arg(&path)
-        .arg(&probes_json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = run_python(NP_LOAD, &[&path, &probes_json]);
     println!("numpy: shape {}, dtype {}", v["shape"], v["dtype"]);
     assert_eq!(
         v["shape"],
@@ -159,7 +147,7 @@ for name, arr in [("f8", a.astype("<f8")), ("fortran", np.asfortranarray(a)),
 json.dump(side, open(d + "/good.npy.json", "w"))
 print(json.dumps({"ok": True}))
 "#;
-    run_python(script, &[dir.path()]);
+    run_python(script, &[&dir.path()]);
     let g = read_npy(&good).unwrap();
     assert_eq!(g.dims(), [9, 6, 4]);
     assert_eq!(g.transform().origin, [1.0, -2.0, 0.5]);
@@ -327,19 +315,7 @@ fn vti_round_trips_and_parses_independently() {
 
     let probes = probe_nodes(g.dims());
     let probes_json = serde_json::to_string(&probes).unwrap();
-    let out = Command::new(python())
-        .arg("-c")
-        .arg(VTI_PARSE)
-        .arg(&path)
-        .arg(&probes_json)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = run_python(VTI_PARSE, &[&path, &probes_json]);
     println!("vti header: {} {}", v["root"], v["array"]);
     assert_eq!(v["root"]["type"], "ImageData");
     assert_eq!(v["root"]["byte_order"], "LittleEndian");
