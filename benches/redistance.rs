@@ -21,12 +21,13 @@ use vesselmsr::levelset::redistance::{redistance, RedistanceOptions, RedistanceS
 
 const N: usize = 256;
 
-/// Median wall time of `run` over 3 runs, each on a fresh copy of `phi0` (the copy not timed).
+/// Median wall time of 5 runs, each on a fresh copy of `phi0` (the copy not timed). The
+/// reference side takes the best of 3 (its runs are 4 s each): a comparison that favours it.
 fn time_redistance(phi0: &Grid3, opts: &RedistanceOptions) -> (Duration, Grid3, usize) {
     let mut times = Vec::new();
     let mut last = None;
     let mut sweeps = 0;
-    for _ in 0..3 {
+    for _ in 0..5 {
         let mut g = phi0.clone();
         let t = Instant::now();
         let report = redistance(&mut g, opts).expect("redistance runs");
@@ -35,7 +36,7 @@ fn time_redistance(phi0: &Grid3, opts: &RedistanceOptions) -> (Duration, Grid3, 
         last = Some(g);
     }
     times.sort();
-    (times[1], last.unwrap(), sweeps)
+    (times[2], last.unwrap(), sweeps)
 }
 
 struct Reference {
