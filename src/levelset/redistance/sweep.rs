@@ -89,25 +89,20 @@ pub(super) fn sweep_distance(
         Some(b) if !closest => b as f32,
         _ => f32::INFINITY,
     };
-    let val: Vec<AtomicU32> = (0..n)
-        .into_par_iter()
-        .map(|_| AtomicU32::new(far.to_bits()))
-        .collect();
+    let filled = |len: usize, value: u32| {
+        let mut v = Vec::with_capacity(len);
+        v.resize_with(len, || AtomicU32::new(value));
+        v
+    };
+    let val = filled(n, far.to_bits());
     // No interface node reached yet: the sentinel after the last one, a point at infinity.
     let none = seeds.len() as u32;
-    let ids: Vec<AtomicU32> = if closest {
-        (0..n)
-            .into_par_iter()
-            .map(|_| AtomicU32::new(none))
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let ids = if closest { filled(n, none) } else { Vec::new() };
     let rows = ny * nz;
     // Closest point: one stamp per axis and side the row was last read from (see `row`).
     let slots = if closest { 6 * rows } else { rows };
-    let visited: Vec<AtomicU32> = (0..slots).map(|_| AtomicU32::new(0)).collect();
-    let changed: Vec<AtomicU32> = (0..rows).map(|_| AtomicU32::new(0)).collect();
+    let visited = filled(slots, 0);
+    let changed = filled(rows, 0);
     let span: Vec<AtomicU64> = (0..rows).map(|_| AtomicU64::new(EMPTY_SPAN)).collect();
     for (s, (&node, &d)) in seeds.node.iter().zip(&seeds.dist).enumerate() {
         let stored = if closest {
