@@ -442,8 +442,8 @@ def hausdorff(VA: np.ndarray, FA: np.ndarray, VB: np.ndarray, FB: np.ndarray) ->
     return {"hausdorff": d, "seconds": seconds}
 
 
-def read_mask(path: str | os.PathLike, dims: tuple[int, int, int]) -> np.ndarray:
-    """Read a raw u8 mask of NX×NY×NZ nodes, x fastest, as a bool array indexed [k, j, i]."""
+def _read_raw_grid(path: str | os.PathLike, dims: tuple[int, int, int], itemsize: int, kind: str) -> bytes:
+    """The bytes of a raw grid file of NX·NY·NZ values of `itemsize` bytes, x fastest, checked."""
     path = Path(path)
     nx, ny, nz = dims
     if min(dims) < 1:
@@ -452,10 +452,18 @@ def read_mask(path: str | os.PathLike, dims: tuple[int, int, int]) -> np.ndarray
         data = path.read_bytes()
     except OSError as e:
         raise OracleError(f"{path}: {e.strerror or e}") from None
-    if len(data) != nx * ny * nz:
+    if len(data) != itemsize * nx * ny * nz:
         raise OracleError(
-            f"{path}: {len(data)} bytes for a grid of {nx}×{ny}×{nz} = {nx * ny * nz} nodes"
+            f"{path}: {len(data)} bytes for a {kind} grid of {nx}×{ny}×{nz} = {nx * ny * nz} nodes"
+            f" ({itemsize} bytes each, x fastest)"
         )
+    return data
+
+
+def read_mask(path: str | os.PathLike, dims: tuple[int, int, int]) -> np.ndarray:
+    """Read a raw u8 mask of NX×NY×NZ nodes, x fastest, as a bool array indexed [k, j, i]."""
+    nx, ny, nz = dims
+    data = _read_raw_grid(path, dims, 1, "u8 mask")
     return np.frombuffer(data, dtype=np.uint8).reshape(nz, ny, nx) != 0
 
 
@@ -532,18 +540,7 @@ def close_holes(V: np.ndarray, F: np.ndarray, max_hole_size: int | None = None) 
 
 def read_grid(path: str | os.PathLike, dims: tuple[int, int, int]) -> np.ndarray:
     """Read a grid of raw little-endian float64 values, x fastest (nx·ny·nz values)."""
-    path = Path(path)
-    nx, ny, nz = dims
-    if min(dims) < 1:
-        raise OracleError(f"grid dimensions must be positive, got {dims}")
-    try:
-        data = path.read_bytes()
-    except OSError as e:
-        raise OracleError(f"{path}: {e.strerror or e}") from None
-    if len(data) != 8 * nx * ny * nz:
-        raise OracleError(
-            f"{path}: size {len(data)} is not 8·{nx}·{ny}·{nz} (float64 grid, x fastest)"
-        )
+    data = _read_raw_grid(path, dims, 8, "float64")
     return np.frombuffer(data, dtype="<f8").astype(np.float64)
 
 

@@ -110,6 +110,13 @@ fn max_error(wn: &WindingNumber, pts: &[Point3<f64>], exact: &[f64]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The exact winding number (sum of solid angles) at each point, in parallel.
+fn exact_winding_numbers(mesh: &TriMesh, pts: &[Point3<f64>]) -> Vec<f64> {
+    pts.par_iter()
+        .map(|p| winding_number_exact(mesh, p))
+        .collect()
+}
+
 #[test]
 fn real_meshes_fast_equals_exact() {
     let Some(meshes) = real_meshes() else { return };
@@ -117,10 +124,7 @@ fn real_meshes_fast_equals_exact() {
         let diag = bbox_diagonal(mesh);
         let bvh = MeshBvh::new(mesh);
         let pts = sample_points(mesh, 10_000, 43);
-        let exact: Vec<f64> = pts
-            .par_iter()
-            .map(|p| winding_number_exact(mesh, p))
-            .collect();
+        let exact = exact_winding_numbers(mesh, &pts);
         let err = |options: WindingOptions| {
             max_error(&WindingNumber::from_bvh(bvh.clone(), options), &pts, &exact)
         };
@@ -354,10 +358,7 @@ fn winding_order_beta_sweep() {
     for (name, mesh) in &meshes {
         let bvh = MeshBvh::new(mesh);
         let pts = sample_points(mesh, 10_000, 43);
-        let exact: Vec<f64> = pts
-            .par_iter()
-            .map(|p| winding_number_exact(mesh, p))
-            .collect();
+        let exact = exact_winding_numbers(mesh, &pts);
         for (oi, &order) in orders.iter().enumerate() {
             let mut line = format!("{name:32} order {order}:");
             for (bi, &beta) in betas.iter().enumerate() {
