@@ -1,13 +1,16 @@
 //! `vesselmsr remesh MESH -o OUT`: mesh → signed distance grid φ → zero level set by marching
-//! cubes, vertices then projected onto the input: a closed, manifold, outward mesh at the
-//! grid's resolution (open ends come out closed).
+//! cubes (enclosed cavities the input does not have reopened), vertices then projected onto the
+//! input and edges split where the surface is still off it: a closed, manifold, outward mesh at
+//! the grid's resolution (open ends come out closed).
 
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
 use super::{print_json, Context};
 use crate::bvh::MeshBvh;
 use crate::io::{write_mesh, MeshFormat};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
+use crate::levelset::cavity::{extract_joining_cavities, find_cavities, CavityOptions};
 use crate::levelset::project::{project_vertices, ProjectOptions};
+use crate::levelset::refine::{refine_to_surface, remesh_refine_options, RefineReport};
 use crate::mesh::info::{mesh_info, MeshInfo};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -21,8 +24,9 @@ pub struct RemeshArgs {
     pub output: PathBuf,
     #[command(flatten)]
     pub grid: GridArgs,
-    /// Keep the marching-cubes vertices where they are, instead of moving them onto the input
-    /// surface (within one voxel, away from open ends).
+    /// Keep the marching-cubes surface as it is, instead of moving its vertices onto the input
+    /// surface (within one voxel, away from open ends) and splitting the edges whose midpoints
+    /// stay farther than 0.05 voxel from it.
     #[arg(long)]
     pub no_project: bool,
 }
@@ -40,6 +44,10 @@ struct Timings {
 struct RemeshOutput {
     grid: GridJson,
     output: MeshInfo,
+    /// Enclosed cavities of the extraction reopened to the outside (folds narrower than h).
+    cavities_joined: usize,
+    /// Edges split to bring the surface within 0.05 voxel of the input.
+    edges_split: usize,
     timings: Timings,
 }
 
@@ -49,7 +57,7 @@ pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
     let Voxelized {
         mesh,
         spec,
-        phi,
+        mut phi,
         read_s: read,
         voxelize_s,
         bar,
@@ -57,16 +65,35 @@ pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
     } = load_and_voxelize(ctx, &args.mesh, &args.grid)?;
     bar.set_message("extracting the surface");
     let t = Instant::now();
-    let mut surface = extract_surface(&phi, &ExtractOptions::default())?;
+    // A fold narrower than the voxel can enclose a bubble of outside the input does not have:
+    // reopen it (only when the input has no cavity of its own).
+    let extract = ExtractOptions::default();
+    let (mut surface, cavities_joined) = if find_cavities(&mesh).is_empty() {
+        extract_joining_cavities(&mut phi, &extract, &CavityOptions::default())?
+    } else {
+        (extract_surface(&phi, &extract)?, 0)
+    };
+    if cavities_joined > 0 && !ctx.quiet {
+        bar.suspend(|| {
+            eprintln!(
+                "note: reopened {cavities_joined} fold(s) of the input that closed into an enclosed \
+                 cavity at this voxel size"
+            )
+        });
+    }
     let mc = t.elapsed().as_secs_f64();
     let t = Instant::now();
+    let mut refined = RefineReport::default();
     if !args.no_project {
         bar.set_message("projecting onto the input");
         let opts = ProjectOptions {
             max_distance: spec.voxel(),
             ..Default::default()
         };
-        project_vertices(&mut surface, &mesh, &MeshBvh::new(&mesh), &opts);
+        let bvh = MeshBvh::new(&mesh);
+        project_vertices(&mut surface, &mesh, &bvh, &opts);
+        bar.set_message("refining towards the input");
+        refined = refine_to_surface(&mut surface, &mesh, &bvh, &remesh_refine_options(spec.voxel()));
     }
     let project = t.elapsed().as_secs_f64();
     let output = mesh_info(&surface);
@@ -77,6 +104,8 @@ pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
     let out = RemeshOutput {
         grid: GridJson::of(&spec),
         output,
+        cavities_joined,
+        edges_split: refined.edges_split,
         timings: Timings {
             read,
             voxelize: voxelize_s,

@@ -4,7 +4,9 @@
 //! back to a signed distance function), `marching_cubes` (φ → closed mesh) and `project`
 //! (extracted vertices onto the input surface).
 
+pub mod cavity;
 pub mod marching_cubes;
 pub mod project;
 pub mod redistance;
+pub mod refine;
 pub mod voxelize;

@@ -9,6 +9,7 @@
 use crate::bvh::MeshBvh;
 use crate::mesh::topology::EdgeMap;
 use crate::TriMesh;
+use nalgebra::Point3;
 use rayon::prelude::*;
 use std::collections::HashSet;
 
@@ -43,19 +44,11 @@ pub fn project_vertices(
     target: &MeshBvh,
     opts: &ProjectOptions,
 ) -> usize {
-    let rim = rim_edges(target_mesh);
-    let proposed: Vec<Option<nalgebra::Point3<f64>>> = mesh
+    let target = ProjectionTarget::new(target_mesh, target);
+    let proposed: Vec<Option<Point3<f64>>> = mesh
         .vertices
         .par_iter()
-        .map(|v| {
-            let c = target.closest_point_within(v, opts.max_distance)?;
-            let [a, b, cc] = target_mesh.faces[c.face as usize];
-            // On a rim edge when the barycentric weight of the opposite corner vanishes.
-            let on_rim = [(b, cc, 0), (cc, a, 1), (a, b, 2)]
-                .iter()
-                .any(|&(u, w, k)| c.bary[k] <= 1e-9 && rim.contains(&(u.min(w), u.max(w))));
-            (!on_rim).then_some(c.point)
-        })
+        .map(|v| target.closest_off_rim(v, opts.max_distance))
         .collect();
     let original = mesh.vertices.clone();
     let mut moved: Vec<bool> = proposed.iter().map(Option::is_some).collect();
@@ -92,6 +85,35 @@ pub fn project_vertices(
         }
     }
     moved.iter().filter(|&&m| m).count()
+}
+
+/// The surface vertices are projected onto: its BVH and the rim edges of its open ends.
+pub(crate) struct ProjectionTarget<'a> {
+    mesh: &'a TriMesh,
+    bvh: &'a MeshBvh,
+    rim: HashSet<(u32, u32)>,
+}
+
+impl<'a> ProjectionTarget<'a> {
+    pub(crate) fn new(mesh: &'a TriMesh, bvh: &'a MeshBvh) -> Self {
+        ProjectionTarget {
+            mesh,
+            bvh,
+            rim: rim_edges(mesh),
+        }
+    }
+
+    /// The closest point of the target to `p` when it is within `max_distance` and not on the
+    /// rim of an open end.
+    pub(crate) fn closest_off_rim(&self, p: &Point3<f64>, max_distance: f64) -> Option<Point3<f64>> {
+        let c = self.bvh.closest_point_within(p, max_distance)?;
+        let [a, b, cc] = self.mesh.faces[c.face as usize];
+        // On a rim edge when the barycentric weight of the opposite corner vanishes.
+        let on_rim = [(b, cc, 0), (cc, a, 1), (a, b, 2)]
+            .iter()
+            .any(|&(u, w, k)| c.bary[k] <= 1e-9 && self.rim.contains(&(u.min(w), u.max(w))));
+        (!on_rim).then_some(c.point)
+    }
 }
 
 /// Undirected boundary edges (used by exactly one triangle) of `mesh`.
