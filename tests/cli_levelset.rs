@@ -1,5 +1,5 @@
 //! The level-set commands through the CLI: `remesh` (JSON keys, watertight output, the grid
-//! flags) and `voxelize` (.npy with its sidecar, .vti), and their bad input: a grid over the
+//! flags) and `voxelize` (.npy with its sidecar, .vti, .nrrd), and their bad input: a grid over the
 //! memory limit, a voxel size ≤ 0 or larger than the mesh, a mesh with no inside, an unknown
 //! output format — exit status 2, one line naming the problem, no output.
 
@@ -120,12 +120,13 @@ fn remesh_refuses_bad_grids_and_meshes_without_inside() {
 }
 
 #[test]
-fn voxelize_writes_a_signed_distance_grid_as_npy_and_vti() {
+fn voxelize_writes_a_signed_distance_grid_as_npy_vti_and_nrrd() {
     use rand::RngExt;
     use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
     let tmp = tempfile::tempdir().unwrap();
     let npy = tmp.path().join("phi.npy");
     let vti = tmp.path().join("phi.VTI");
+    let nrrd = tmp.path().join("phi.nrrd");
     let report = vesselmsr_json(&[
         "--json",
         "voxelize",
@@ -135,21 +136,24 @@ fn voxelize_writes_a_signed_distance_grid_as_npy_and_vti() {
         "--resolution",
         "80",
     ]);
-    vesselmsr_json(&[
-        "--json",
-        "voxelize",
-        &aorta(),
-        "-o",
-        vti.to_str().unwrap(),
-        "--resolution",
-        "80",
-    ]);
+    for other in [&vti, &nrrd] {
+        vesselmsr_json(&[
+            "--json",
+            "voxelize",
+            &aorta(),
+            "-o",
+            other.to_str().unwrap(),
+            "--resolution",
+            "80",
+        ]);
+    }
     let phi = vesselmsr::io::read_npy(&npy).unwrap();
     assert_eq!(
         phi,
         vesselmsr::io::read_vti(&vti).unwrap(),
-        "the two formats hold the same grid"
+        "the formats hold the same grid"
     );
+    assert_eq!(phi, vesselmsr::io::read_nrrd(&nrrd).unwrap());
     let dims: Vec<usize> = report["grid"]["dims"]
         .as_array()
         .unwrap()
@@ -210,7 +214,7 @@ fn voxelize_refuses_unknown_grid_formats() {
             "--resolution",
             "32",
         ],
-        ".npy or .vti",
+        ".npy, .vti or .nrrd",
         &out,
     );
 }

@@ -11,7 +11,9 @@ use serde_json::Value;
 use std::ffi::OsStr;
 use std::process::Command;
 use vesselmsr::grid::{Grid3, GridTransform};
-use vesselmsr::io::{npy_sidecar_path, read_npy, read_vti, write_npy, write_vti};
+use vesselmsr::io::{
+    npy_sidecar_path, read_npy, read_nrrd, read_vti, write_npy, write_nrrd, write_vti,
+};
 
 /// Runs `script` with the oracle's Python and `args`, returning its stdout parsed as JSON.
 fn run_python(script: &str, args: &[&dyn AsRef<OsStr>]) -> Value {
@@ -484,5 +486,89 @@ fn vtk_reads_the_vti_when_available() {
             b.to_bits(),
             "VTK point order is x fastest, like Grid3"
         );
+    }
+}
+
+/// ITK's NRRD reader (the one 3D Slicer loads `.nrrd` volumes with), through SimpleITK.
+const ITK_READ: &str = r#"
+import json, sys
+import SimpleITK as sitk
+img = sitk.ReadImage(sys.argv[1])
+a = sitk.GetArrayFromImage(img)
+probes = json.loads(sys.argv[2])
+print(json.dumps({
+    "size": list(img.GetSize()),
+    "origin": list(img.GetOrigin()),
+    "spacing": list(img.GetSpacing()),
+    "direction": list(img.GetDirection()),
+    "pixel": img.GetPixelIDTypeAsString(),
+    "values": [float(a[k, j, i]) for i, j, k in probes],
+}))
+"#;
+
+#[test]
+fn nrrd_round_trips_and_itk_reads_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("phi.nrrd");
+    let g = sample_grid();
+    write_nrrd(&path, &g).unwrap();
+    same_bits(&read_nrrd(&path).unwrap(), &g);
+
+    let probes = probe_nodes(g.dims());
+    let probes_json = serde_json::to_string(&probes).unwrap();
+    let v = run_python(ITK_READ, &[&path, &probes_json]);
+    println!("ITK: {v}");
+    assert_eq!(v["size"], serde_json::json!([7, 5, 3]));
+    assert_eq!(v["pixel"], "32-bit float");
+    assert_eq!(
+        v["direction"],
+        serde_json::json!([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])
+    );
+    for a in 0..3 {
+        assert_eq!(v["origin"][a].as_f64().unwrap(), g.transform().origin[a]);
+        assert_eq!(v["spacing"][a].as_f64().unwrap(), g.voxel());
+    }
+    for (n, &[i, j, k]) in probes.iter().enumerate() {
+        assert_eq!(v["values"][n].as_f64().unwrap(), g.get(i, j, k) as f64);
+    }
+}
+
+#[test]
+fn nrrd_reader_refuses_broken_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("phi.nrrd");
+    write_nrrd(&path, &sample_grid()).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let end = bytes.windows(2).position(|w| w == b"\n\n").unwrap();
+    let header = String::from_utf8_lossy(&bytes[..end]).into_owned();
+    let with_header = |h: String| [h.as_bytes(), &bytes[end..]].concat();
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "truncated",
+            bytes[..bytes.len() - 8].to_vec(),
+            "bytes of data",
+        ),
+        ("no header end", bytes[..end].to_vec(), "blank line"),
+        ("not nrrd", b"P6\n7 5\n".to_vec(), "not a NRRD"),
+        (
+            "gzip",
+            with_header(header.replace("encoding: raw", "encoding: gzip")),
+            "gzip",
+        ),
+        (
+            "double",
+            with_header(header.replace("type: float", "type: double")),
+            "double",
+        ),
+        (
+            "rotated",
+            with_header(header.replace("(0,0.3,0)", "(0.3,0,0)")),
+            "axis-aligned",
+        ),
+    ];
+    for (what, data, word) in cases {
+        std::fs::write(&path, data).unwrap();
+        let e = read_nrrd(&path).unwrap_err().to_string();
+        assert!(e.contains("phi.nrrd") && e.contains(word), "{what}: {e}");
     }
 }

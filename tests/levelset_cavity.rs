@@ -39,9 +39,12 @@ fn a_bubble_is_joined_through_its_thinnest_wall() {
     assert_eq!(find_cavities(&plain).len(), 1);
 
     let mut phi = original.clone();
-    let (surface, joined) =
-        extract_joining_cavities(&mut phi, &ExtractOptions::default(), &CavityOptions::default())
-            .unwrap();
+    let (surface, joined) = extract_joining_cavities(
+        &mut phi,
+        &ExtractOptions::default(),
+        &CavityOptions::default(),
+    )
+    .unwrap();
     assert_eq!(joined, 1);
     let info = mesh_info(&surface);
     assert!(info.watertight, "{:?}", info.leaks());
@@ -63,7 +66,10 @@ fn a_bubble_is_joined_through_its_thinnest_wall() {
     for &[i, j, k] in &changed {
         assert_eq!(phi.get(i, j, k), 0.5);
         let p = phi.world(i, j, k);
-        assert!(p.x > 17.3 + 11.0, "changed node {p:?} is not in the thin wall");
+        assert!(
+            p.x > 17.3 + 11.0,
+            "changed node {p:?} is not in the thin wall"
+        );
     }
 }
 
@@ -78,9 +84,12 @@ fn a_grid_without_cavities_is_left_alone() {
         phi.data_mut()[n] = ((p - c).norm() - 14.0) as f32;
     }
     let before = phi.clone();
-    let (surface, joined) =
-        extract_joining_cavities(&mut phi, &ExtractOptions::default(), &CavityOptions::default())
-            .unwrap();
+    let (surface, joined) = extract_joining_cavities(
+        &mut phi,
+        &ExtractOptions::default(),
+        &CavityOptions::default(),
+    )
+    .unwrap();
     assert_eq!(joined, 0);
     assert_eq!(connected_components(&surface).0, 1);
     assert_eq!(phi.data(), before.data());

@@ -15,11 +15,11 @@ use vesselmsr::grid::{grid_for_mesh, GridOptions};
 use vesselmsr::levelset::cavity::{extract_joining_cavities, CavityOptions};
 use vesselmsr::levelset::marching_cubes::ExtractOptions;
 use vesselmsr::levelset::project::{project_vertices, ProjectOptions};
+use vesselmsr::levelset::refine::{refine_to_surface, remesh_refine_options};
 use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
 use vesselmsr::mesh::cap::{cap_holes, CapOptions};
 use vesselmsr::mesh::distance::sample_surface;
 use vesselmsr::mesh::info::mesh_info;
-use vesselmsr::levelset::refine::{refine_to_surface, remesh_refine_options};
 use vesselmsr::mesh::topology::{boundary_loops, connected_components, Orientation};
 use vesselmsr::TriMesh;
 

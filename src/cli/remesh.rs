@@ -7,8 +7,8 @@ use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
 use super::{print_json, Context};
 use crate::bvh::MeshBvh;
 use crate::io::{write_mesh, MeshFormat};
-use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::cavity::{extract_joining_cavities, find_cavities, CavityOptions};
+use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::project::{project_vertices, ProjectOptions};
 use crate::levelset::refine::{refine_to_surface, remesh_refine_options, RefineReport};
 use crate::mesh::info::{mesh_info, MeshInfo};
@@ -93,7 +93,12 @@ pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
         let bvh = MeshBvh::new(&mesh);
         project_vertices(&mut surface, &mesh, &bvh, &opts);
         bar.set_message("refining towards the input");
-        refined = refine_to_surface(&mut surface, &mesh, &bvh, &remesh_refine_options(spec.voxel()));
+        refined = refine_to_surface(
+            &mut surface,
+            &mesh,
+            &bvh,
+            &remesh_refine_options(spec.voxel()),
+        );
     }
     let project = t.elapsed().as_secs_f64();
     let output = mesh_info(&surface);

@@ -1,9 +1,9 @@
-//! `vesselmsr voxelize MESH -o PHI.npy|PHI.vti`: the signed distance grid φ of a mesh (negative
+//! `vesselmsr voxelize MESH -o PHI.npy|PHI.vti|PHI.nrrd`: the signed distance grid φ of a mesh (negative
 //! inside), exact near the surface and redistanced by fast sweeping elsewhere.
 
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
 use super::{print_json, Context};
-use crate::io::{write_npy, write_vti};
+use crate::io::{write_npy, write_nrrd, write_vti};
 use crate::levelset::redistance::{redistance, RedistanceOptions};
 use crate::levelset::voxelize::VoxelizeOptions;
 use std::path::{Path, PathBuf};
@@ -13,8 +13,8 @@ use std::time::Instant;
 pub struct VoxelizeArgs {
     /// Input mesh (.stl, .obj or .ply).
     pub mesh: PathBuf,
-    /// Output grid: .npy (NumPy, with a .npy.json sidecar holding the transform) or .vti (VTK
-    /// ImageData, for ParaView).
+    /// Output grid: .npy (NumPy, with a .npy.json sidecar holding the transform), .vti (VTK
+    /// ImageData, for ParaView) or .nrrd (NRRD, for 3D Slicer and ITK).
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     #[command(flatten)]
@@ -24,6 +24,7 @@ pub struct VoxelizeArgs {
 enum GridFormat {
     Npy,
     Vti,
+    Nrrd,
 }
 
 fn grid_format(path: &Path) -> anyhow::Result<GridFormat> {
@@ -34,8 +35,9 @@ fn grid_format(path: &Path) -> anyhow::Result<GridFormat> {
     match ext.as_deref() {
         Some("npy") => Ok(GridFormat::Npy),
         Some("vti") => Ok(GridFormat::Vti),
+        Some("nrrd") => Ok(GridFormat::Nrrd),
         _ => anyhow::bail!(
-            "{}: unknown grid format (expected extension .npy or .vti)",
+            "{}: unknown grid format (expected extension .npy, .vti or .nrrd)",
             path.display()
         ),
     }
@@ -87,6 +89,7 @@ pub fn run(ctx: &Context, args: &VoxelizeArgs) -> anyhow::Result<()> {
     match format {
         GridFormat::Npy => write_npy(&args.output, &phi)?,
         GridFormat::Vti => write_vti(&args.output, &phi)?,
+        GridFormat::Nrrd => write_nrrd(&args.output, &phi)?,
     }
     let write = t.elapsed().as_secs_f64();
     bar.finish_and_clear();

@@ -6,11 +6,12 @@
 //! non-degenerate triangle. Every error names the file and the problem in one line. Writers go
 //! through [`write_atomic`], so a failed write leaves no partial file.
 //!
-//! Grids (level-set functions) are written as NumPy `.npy` with a JSON sidecar (`npy`) and as
-//! VTK ImageData `.vti` (`vti`).
+//! Grids (level-set functions) are written as NumPy `.npy` with a JSON sidecar (`npy`), as
+//! VTK ImageData `.vti` (`vti`, for ParaView) and as NRRD (`nrrd`, for 3D Slicer and ITK).
 
 mod atomic;
 mod npy;
+mod nrrd;
 mod obj;
 mod ply;
 mod stl;
@@ -20,6 +21,7 @@ mod vti;
 
 pub use atomic::write_atomic;
 pub use npy::{npy_sidecar_path, read_npy, write_npy, NpySidecar};
+pub use nrrd::{read_nrrd, write_nrrd};
 pub use vti::{read_vti, write_vti, VTI_ARRAY_NAME};
 
 use crate::{Error, Result, TriMesh};

@@ -84,7 +84,12 @@ pub fn join_cavities(
         .filter(|&n| {
             let [i, j, k] = phi.coords(n);
             phi.data()[n] > 0.0
-                && (i == 0 || j == 0 || k == 0 || i + 1 == dims[0] || j + 1 == dims[1] || k + 1 == dims[2])
+                && (i == 0
+                    || j == 0
+                    || k == 0
+                    || i + 1 == dims[0]
+                    || j + 1 == dims[1]
+                    || k + 1 == dims[2])
         })
         .collect();
     flood_outside(phi, &mut label, border, OUTSIDE);
@@ -200,7 +205,11 @@ fn cell_corners(phi: &Grid3, p: &nalgebra::Point3<f64>) -> Vec<usize> {
         std::array::from_fn(|a| (q[a].floor().max(0.0) as usize).min(dims[a].saturating_sub(2)));
     let mut out = Vec::with_capacity(8);
     for c in 0..8 {
-        let [i, j, k] = [base[0] + (c & 1), base[1] + ((c >> 1) & 1), base[2] + ((c >> 2) & 1)];
+        let [i, j, k] = [
+            base[0] + (c & 1),
+            base[1] + ((c >> 1) & 1),
+            base[2] + ((c >> 2) & 1),
+        ];
         out.push(phi.index(i, j, k));
     }
     out

@@ -105,7 +105,11 @@ impl<'a> ProjectionTarget<'a> {
 
     /// The closest point of the target to `p` when it is within `max_distance` and not on the
     /// rim of an open end.
-    pub(crate) fn closest_off_rim(&self, p: &Point3<f64>, max_distance: f64) -> Option<Point3<f64>> {
+    pub(crate) fn closest_off_rim(
+        &self,
+        p: &Point3<f64>,
+        max_distance: f64,
+    ) -> Option<Point3<f64>> {
         let c = self.bvh.closest_point_within(p, max_distance)?;
         let [a, b, cc] = self.mesh.faces[c.face as usize];
         // On a rim edge when the barycentric weight of the opposite corner vanishes.
