@@ -11,6 +11,7 @@
 
 mod atomic;
 mod npy;
+mod npz;
 mod nrrd;
 mod obj;
 mod ply;
@@ -21,6 +22,7 @@ mod vti;
 
 pub use atomic::write_atomic;
 pub use npy::{npy_sidecar_path, read_npy, write_npy, NpySidecar};
+pub use npz::{read_npz, write_npz, NpyArray, NpyData};
 pub use nrrd::{read_nrrd, write_nrrd};
 pub use vti::{read_vti, write_vti, VTI_ARRAY_NAME};
 

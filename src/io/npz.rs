@@ -1,0 +1,289 @@
+//! NumPy `.npz` archives: a zip file of `.npy` arrays, as `np.savez_compressed` writes and
+//! `np.load` reads (without pickling: no object arrays).
+//!
+//! [`NpyArray`] holds one array of the dtypes the project stores: `<f8`, `<f4`, `<u4`, `<i8`
+//! and `<U` text (a string of UTF-32 code points, as NumPy keeps `str` arrays), each with its
+//! C-order shape (`()` for a scalar). [`write_npz`] writes the members deflated in the given
+//! order, atomically; [`read_npz`] reads every member back and checks each header (format
+//! version 1.0 to 3.0, little-endian, C order, a byte count that matches the shape), so a
+//! truncated or edited archive gives an error naming the file, the member and the problem.
+
+use super::write_atomic;
+use crate::{Error, Result};
+use std::io::{Read, Write};
+use std::path::Path;
+
+const MAGIC: &[u8; 6] = b"\x93NUMPY";
+
+/// The values of one array, flat in C order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum NpyData {
+    F64(Vec<f64>),
+    F32(Vec<f32>),
+    U32(Vec<u32>),
+    I64(Vec<i64>),
+    /// Text, stored as a scalar `<U` array of this many code points.
+    Text(String),
+}
+
+/// One array: its shape (C order; empty for a scalar) and values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NpyArray {
+    pub shape: Vec<usize>,
+    pub data: NpyData,
+}
+
+impl NpyArray {
+    /// An array of `data` with `shape`; panics if the sizes differ (a programming error).
+    pub fn new(shape: &[usize], data: NpyData) -> NpyArray {
+        let a = NpyArray {
+            shape: shape.to_vec(),
+            data,
+        };
+        assert_eq!(a.expected_len(), a.len(), "shape {shape:?} vs data");
+        a
+    }
+
+    /// A scalar text array.
+    pub fn text(s: &str) -> NpyArray {
+        NpyArray::new(&[], NpyData::Text(s.to_owned()))
+    }
+
+    /// A scalar f64.
+    pub fn scalar_f64(v: f64) -> NpyArray {
+        NpyArray::new(&[], NpyData::F64(vec![v]))
+    }
+
+    /// A scalar i64.
+    pub fn scalar_i64(v: i64) -> NpyArray {
+        NpyArray::new(&[], NpyData::I64(vec![v]))
+    }
+
+    fn expected_len(&self) -> usize {
+        match self.data {
+            NpyData::Text(_) => 1,
+            _ => self.shape.iter().product(),
+        }
+    }
+
+    /// Number of stored values (1 for text).
+    pub fn len(&self) -> usize {
+        match &self.data {
+            NpyData::F64(v) => v.len(),
+            NpyData::F32(v) => v.len(),
+            NpyData::U32(v) => v.len(),
+            NpyData::I64(v) => v.len(),
+            NpyData::Text(_) => 1,
+        }
+    }
+
+    /// Whether the array holds no value.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn descr(&self) -> String {
+        match &self.data {
+            NpyData::F64(_) => "<f8".into(),
+            NpyData::F32(_) => "<f4".into(),
+            NpyData::U32(_) => "<u4".into(),
+            NpyData::I64(_) => "<i8".into(),
+            NpyData::Text(s) => format!("<U{}", s.chars().count().max(1)),
+        }
+    }
+
+    /// The `.npy` bytes of this array (format 1.0, header padded to 64 bytes).
+    pub fn to_npy(&self) -> Vec<u8> {
+        let shape = match self.shape.len() {
+            0 => "()".to_owned(),
+            1 => format!("({},)", self.shape[0]),
+            _ => format!(
+                "({})",
+                self.shape
+                    .iter()
+                    .map(|d| d.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        let dict = format!(
+            "{{'descr': '{}', 'fortran_order': False, 'shape': {shape}, }}",
+            self.descr()
+        );
+        let unpadded = MAGIC.len() + 4 + dict.len() + 1;
+        let total = unpadded.div_ceil(64) * 64;
+        let mut out = Vec::with_capacity(total + 8 * self.len());
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&[1, 0]);
+        out.extend_from_slice(&((total - MAGIC.len() - 4) as u16).to_le_bytes());
+        out.extend_from_slice(dict.as_bytes());
+        out.resize(total - 1, b' ');
+        out.push(b'\n');
+        match &self.data {
+            NpyData::F64(v) => v.iter().for_each(|x| out.extend(x.to_le_bytes())),
+            NpyData::F32(v) => v.iter().for_each(|x| out.extend(x.to_le_bytes())),
+            NpyData::U32(v) => v.iter().for_each(|x| out.extend(x.to_le_bytes())),
+            NpyData::I64(v) => v.iter().for_each(|x| out.extend(x.to_le_bytes())),
+            NpyData::Text(s) => {
+                s.chars().for_each(|c| out.extend((c as u32).to_le_bytes()));
+                if s.is_empty() {
+                    out.extend(0u32.to_le_bytes());
+                }
+            }
+        }
+        out
+    }
+
+    /// Parses `.npy` bytes of the dtypes above.
+    pub fn from_npy(bytes: &[u8]) -> std::result::Result<NpyArray, String> {
+        if bytes.len() < 10 || &bytes[..6] != MAGIC {
+            return Err("not a .npy array (no \\x93NUMPY magic)".into());
+        }
+        let (len, start): (usize, usize) = match bytes[6] {
+            1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
+            2 | 3 if bytes.len() >= 12 => (
+                u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+                12,
+            ),
+            v => return Err(format!("unsupported .npy format version {v}")),
+        };
+        let end = start
+            .checked_add(len)
+            .filter(|&e| e <= bytes.len())
+            .ok_or("the header runs past the end")?;
+        let dict = std::str::from_utf8(&bytes[start..end]).map_err(|_| "the header is not text")?;
+        let value = |key: &str| -> std::result::Result<&str, String> {
+            let k = format!("'{key}':");
+            let at = dict.find(&k).ok_or(format!("no '{key}' in the header"))? + k.len();
+            Ok(dict[at..].trim_start())
+        };
+        let descr = value("descr")?;
+        let descr = descr
+            .strip_prefix('\'')
+            .and_then(|d| d.split('\'').next())
+            .ok_or("cannot read descr")?;
+        if !value("fortran_order")?.starts_with("False") {
+            return Err("Fortran-order arrays are not supported".into());
+        }
+        let shape_text = value("shape")?;
+        let close = shape_text.find(')').ok_or("cannot read shape")?;
+        let shape: Vec<usize> = shape_text[1..close]
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(str::parse)
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| format!("cannot read shape {}", &shape_text[..=close]))?;
+        let count = shape
+            .iter()
+            .try_fold(1usize, |a, &d| a.checked_mul(d))
+            .ok_or("shape too large")?;
+        let body = &bytes[end..];
+        let need = |width: usize| -> std::result::Result<(), String> {
+            match count.checked_mul(width) {
+                Some(n) if n == body.len() => Ok(()),
+                _ => Err(format!(
+                    "{} bytes of data, expected {} for shape {shape:?} of {descr}",
+                    body.len(),
+                    count.saturating_mul(width)
+                )),
+            }
+        };
+        let data = match descr {
+            "<f8" => {
+                need(8)?;
+                NpyData::F64(
+                    body.chunks_exact(8)
+                        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+                        .collect(),
+                )
+            }
+            "<f4" => {
+                need(4)?;
+                NpyData::F32(super::npy::read_f32_le(body))
+            }
+            "<u4" => {
+                need(4)?;
+                NpyData::U32(
+                    body.chunks_exact(4)
+                        .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+                        .collect(),
+                )
+            }
+            "<i8" => {
+                need(8)?;
+                NpyData::I64(
+                    body.chunks_exact(8)
+                        .map(|c| i64::from_le_bytes(c.try_into().unwrap()))
+                        .collect(),
+                )
+            }
+            d if d.starts_with("<U") && shape.is_empty() => {
+                let n: usize = d[2..].parse().map_err(|_| format!("bad dtype {d}"))?;
+                need(4 * n)?;
+                let text: String = body
+                    .chunks_exact(4)
+                    .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+                    .take_while(|&u| u != 0)
+                    .map(|u| char::from_u32(u).ok_or("invalid character in text"))
+                    .collect::<std::result::Result<_, _>>()?;
+                NpyData::Text(text)
+            }
+            d => return Err(format!("unsupported dtype {d}")),
+        };
+        Ok(NpyArray { shape, data })
+    }
+}
+
+/// Writes `members` (name without `.npy`, array) to `path` as a deflated `.npz` (atomic).
+pub fn write_npz(path: &Path, members: &[(&str, NpyArray)]) -> Result<()> {
+    write_atomic(path, |w| {
+        let mut buf = std::io::Cursor::new(Vec::new());
+        {
+            let mut zip = zip::ZipWriter::new(&mut buf);
+            let options = zip::write::SimpleFileOptions::default()
+                .compression_method(zip::CompressionMethod::Deflated)
+                .large_file(true);
+            for (name, array) in members {
+                zip.start_file(format!("{name}.npy"), options)
+                    .map_err(|e| Error::format(path, format!("zip: {e}")))?;
+                zip.write_all(&array.to_npy())
+                    .map_err(|e| Error::io(path, e))?;
+            }
+            zip.finish()
+                .map_err(|e| Error::format(path, format!("zip: {e}")))?;
+        }
+        w.write_all(buf.get_ref()).map_err(|e| Error::io(path, e))
+    })
+}
+
+/// Reads every `.npy` member of the `.npz` at `path`, in archive order (names without `.npy`).
+pub fn read_npz(path: &Path) -> Result<Vec<(String, NpyArray)>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
+        .map_err(|e| Error::format(path, format!("not a readable .npz (zip) archive: {e}")))?;
+    let mut out = Vec::with_capacity(zip.len());
+    for i in 0..zip.len() {
+        let mut member = zip
+            .by_index(i)
+            .map_err(|e| Error::format(path, format!("member {i}: {e}")))?;
+        let name = member
+            .name()
+            .map_err(|e| Error::format(path, format!("member {i}: {e}")))?
+            .into_owned();
+        let Some(stem) = name.strip_suffix(".npy") else {
+            return Err(Error::format(
+                path,
+                format!("member {name} is not a .npy array"),
+            ));
+        };
+        let mut bytes = Vec::with_capacity(member.size().min(1 << 30) as usize);
+        member
+            .read_to_end(&mut bytes)
+            .map_err(|e| Error::format(path, format!("member {name}: {e}")))?;
+        let array =
+            NpyArray::from_npy(&bytes).map_err(|m| Error::format(path, format!("{name}: {m}")))?;
+        out.push((stem.to_owned(), array));
+    }
+    Ok(out)
+}

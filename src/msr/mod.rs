@@ -1,0 +1,10 @@
+//! The level-set multiscale representation (MSR) of a surface, after Dong, Chien, Shen and Osher
+//! (Section 2, Definition 2.1 and Algorithm 1; mesh-native as their Remark 2.2(4) allows): the
+//! sample points of the surface are followed across the scales of a curvature motion, and the
+//! displacements W_i between consecutive scales are the details; MSR = {W_1..W_N, φ_T}.
+//! `representation` holds the data, `archive` its `.npz` file.
+
+pub mod archive;
+pub mod representation;
+
+pub use representation::{Msr, MsrParams};
