@@ -2,9 +2,12 @@
 //! (Section 2, Definition 2.1 and Algorithm 1; mesh-native as their Remark 2.2(4) allows): the
 //! sample points of the surface are followed across the scales of a curvature motion, and the
 //! displacements W_i between consecutive scales are the details; MSR = {W_1..W_N, φ_T}.
-//! `representation` holds the data, `archive` its `.npz` file.
+//! `representation` holds the data, `archive` its `.npz` file, `sample` the sample points X_0,
+//! `project` the Newton projection onto a zero level set.
 
 pub mod archive;
+pub mod project;
 pub mod representation;
+pub mod sample;
 
 pub use representation::{Msr, MsrParams};
