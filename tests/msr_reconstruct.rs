@@ -6,7 +6,7 @@ use nalgebra::{Point3, Vector3};
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use vesselmsr::mesh::primitives::icosphere;
-use vesselmsr::msr::reconstruct::{advect_back, AdvectOptions};
+use vesselmsr::msr::reconstruct::{advect_back, AdvectOptions, Departure};
 use vesselmsr::msr::sample::sample_for_spacing;
 
 const R: f64 = 15.0;
@@ -55,10 +55,16 @@ fn normal_details_move_the_surface_back() {
             n * (a + b * n.z)
         })
         .collect();
-    let back = advect_back(&phi, &samples, &details, &AdvectOptions::default()).unwrap();
-    let err = radial_error(&back, c, |n| R - a - b * n.z);
-    println!("normal details: max radial error {err:.3} h");
-    assert!(err < 0.05, "{err}");
+    for departure in [Departure::FootPoint, Departure::Arrival] {
+        let opts = AdvectOptions {
+            departure,
+            ..Default::default()
+        };
+        let back = advect_back(&phi, &samples, &details, &opts).unwrap();
+        let err = radial_error(&back, c, |n| R - a - b * n.z);
+        println!("normal details, {departure:?}: max radial error {err:.3} h");
+        assert!(err < 0.05, "{departure:?}: {err}");
+    }
 }
 
 #[test]
@@ -71,9 +77,15 @@ fn tangential_details_leave_the_surface() {
             Vector3::z().cross(&n) * 1.0
         })
         .collect();
-    let back = advect_back(&phi, &samples, &details, &AdvectOptions::default()).unwrap();
-    let err = radial_error(&back, c, |_| R);
-    // Sliding a sample by |W| along the sphere leaves it at radius √(R² + |W|²) ≈ R + 0.033h.
-    println!("tangential details: max radial error {err:.3} h");
-    assert!(err < 0.06, "{err}");
+    for departure in [Departure::FootPoint, Departure::Arrival] {
+        let opts = AdvectOptions {
+            departure,
+            ..Default::default()
+        };
+        let back = advect_back(&phi, &samples, &details, &opts).unwrap();
+        let err = radial_error(&back, c, |_| R);
+        // Sliding a sample by |W| along the sphere leaves it at radius √(R² + |W|²) ≈ R + 0.033h.
+        println!("tangential details, {departure:?}: max radial error {err:.3} h");
+        assert!(err < 0.06, "{departure:?}: {err}");
+    }
 }

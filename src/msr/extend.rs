@@ -3,9 +3,8 @@
 //!
 //! A node y of the band takes its foot point on the zero level set, f = y − φ(y)∇φ(y)/|∇φ(y)|²
 //! (the closest point when φ is a signed distance), and there the mean of the values of the
-//! samples within `radius` of f, weighted by a Gaussian of the distance (σ = radius/2). So the
-//! value is constant along each normal line, as the paper's extension is. The samples are found
-//! through a uniform hash grid of cell `radius`.
+//! nearest samples (see [`extend_to_band`]). So the value is constant along each normal line, as
+//! the paper's extension is. The samples are found through a uniform hash grid.
 
 use crate::grid::Grid3;
 use nalgebra::{Point3, Vector3};
@@ -62,19 +61,32 @@ fn key(p: &Point3<f64>, cell: f64) -> [i64; 3] {
 /// A vector field on the nodes of a grid: `None` where it was not extended.
 pub type NodeField = Vec<Option<Vector3<f64>>>;
 
-/// Extends `values` (one per point of `points`, which lie on the zero level set of `phi`) to
-/// every node with |φ| ≤ `band` (world units), constant along normals (see the module doc);
-/// `radius` (world units) is the search radius around each foot point, doubled up to three times
-/// where it finds no sample.
-pub fn extend_along_normals(
+/// Where a node looks for the samples whose values it takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ExtendFrom {
+    /// Around its foot point on the zero level set of φ: constant along normals (the paper).
+    #[default]
+    FootPoint,
+    /// Around the node itself (the samples then need not lie on φ's zero level set).
+    Node,
+}
+
+/// Extends `values` (one per point of `points`) to every node with |φ| ≤ `band` (world units).
+/// Each node queries around its foot point or itself (`from`) and takes the mean of the values
+/// of the samples there, weighted by exp(−(d² − d_min²)/2σ²) with σ = `radius`/2, so the
+/// nearest samples dominate; the search radius (`radius` world units at first) doubles until it
+/// finds a sample or passes `band` + `radius`. With [`ExtendFrom::FootPoint`] and samples on
+/// the zero level set, this is the paper's extension constant along normals.
+pub fn extend_to_band(
     phi: &Grid3,
     points: &[Point3<f64>],
     values: &[Vector3<f64>],
     band: f64,
     radius: f64,
+    from: ExtendFrom,
 ) -> NodeField {
     let index = PointIndex::new(points, radius);
-    let sigma2 = (0.5 * radius).powi(2);
+    let two_sigma2 = 2.0 * (0.5 * radius).powi(2);
     (0..phi.data().len())
         .into_par_iter()
         .map(|n| {
@@ -84,23 +96,36 @@ pub fn extend_along_normals(
             }
             let [i, j, k] = phi.coords(n);
             let y = phi.world(i, j, k);
-            let (value, g) = phi.sample_tricubic_with_gradient(&y)?;
-            let g2 = g.norm_squared();
-            let foot = if g2 > 1e-12 { y - value * g / g2 } else { y };
+            let query = match from {
+                ExtendFrom::Node => y,
+                ExtendFrom::FootPoint => {
+                    let (value, g) = phi.sample_tricubic_with_gradient(&y)?;
+                    let g2 = g.norm_squared();
+                    if g2 > 1e-12 {
+                        y - value * g / g2
+                    } else {
+                        y
+                    }
+                }
+            };
             let mut r = radius;
-            for _ in 0..4 {
-                let (mut sum, mut weight) = (Vector3::zeros(), 0.0);
-                index.for_each_within(&foot, r, |s, d| {
-                    let w = (-d * d / (2.0 * sigma2 * (r / radius).powi(2))).exp();
-                    sum += values[s as usize] * w;
-                    weight += w;
-                });
-                if weight > 0.0 {
+            loop {
+                let mut found: Vec<(u32, f64)> = Vec::new();
+                index.for_each_within(&query, r, |s, d| found.push((s, d)));
+                if let Some(dmin) = found.iter().map(|f| f.1).reduce(f64::min) {
+                    let (mut sum, mut weight) = (Vector3::zeros(), 0.0);
+                    for (s, d) in found {
+                        let w = (-(d * d - dmin * dmin) / two_sigma2).exp();
+                        sum += values[s as usize] * w;
+                        weight += w;
+                    }
                     return Some(sum / weight);
+                }
+                if r > band + radius {
+                    return None;
                 }
                 r *= 2.0;
             }
-            None
         })
         .collect()
 }

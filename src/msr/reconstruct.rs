@@ -1,14 +1,14 @@
 //! Reconstruction (IMST) by the level set (paper Definition 2.1(4)): from φ_i, whose zero level
 //! set is S_i, and the details W_i at the samples X_i ∈ S_i, the level set φ_{i−1} of S_{i−1}.
 //!
-//! W_i is extended to a band around S_i constant along normals ([`super::extend`]); then φ is
-//! advected back along the extended field in one semi-Lagrangian step: a point x of S_{i−1}
-//! came from y = x + W̃(y) on S_i, so φ_{i−1}(x) = φ_i(y), with y found by fixed-point iteration
-//! from y₀ = x + W̃(x) (the field is smooth on the scale of its displacements, so a few
-//! iterations converge). Nodes outside the band keep φ_i; the result is redistanced by fast
+//! φ is advected back along the details in one semi-Lagrangian step: a point x of S_{i−1} came
+//! from y = x + W(x) on S_i, so φ_{i−1}(x) = φ_i(y). W at a node comes either from W_i extended
+//! around S_i constant along normals ([`super::extend`]), y then found by fixed-point iteration
+//! of y = x + W̃(y) from y₀ = x + W̃(x) (the paper's way), or, by default, from the samples'
+//! own positions on S_{i−1}, X_{i−1} = X_i − W_i, looked up around x ([`Departure`]). Nodes outside the band keep φ_i; the result is redistanced by fast
 //! sweeping. (The reconstruction by vertices needs none of this: [`super::Msr::mesh_at`].)
 
-use super::extend::{extend_along_normals, NodeField};
+use super::extend::{extend_to_band, ExtendFrom, NodeField};
 use crate::grid::Grid3;
 use crate::levelset::redistance::{redistance, RedistanceOptions};
 use crate::Result;
@@ -24,6 +24,20 @@ pub struct AdvectOptions {
     pub extension_radius: f64,
     /// Band beyond the largest detail where φ is advected (voxels).
     pub band_margin: f64,
+    /// How the details reach the grid nodes: [`Departure::FootPoint`] extends W_i from the
+    /// samples X_i on S_i constant along normals and solves y = x + W̃(y) (the paper);
+    /// [`Departure::Arrival`] looks W_i up around the node among the samples' positions
+    /// X_{i−1} = X_i − W_i on S_{i−1} (the same data), which keeps the two banks of a fold that
+    /// S_i has smoothed over apart.
+    pub departure: Departure,
+}
+
+/// See [`AdvectOptions::departure`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Departure {
+    FootPoint,
+    #[default]
+    Arrival,
 }
 
 impl Default for AdvectOptions {
@@ -32,6 +46,7 @@ impl Default for AdvectOptions {
             fixed_point_iterations: 6,
             extension_radius: 1.5,
             band_margin: 3.0,
+            departure: Departure::default(),
         }
     }
 }
@@ -46,13 +61,26 @@ pub fn advect_back(
     let h = phi.voxel();
     let largest = details.iter().map(|w| w.norm()).fold(0.0, f64::max);
     let band = largest + opts.band_margin * h;
-    let field = extend_along_normals(
-        phi,
-        samples,
-        details,
-        band + largest,
-        opts.extension_radius * h,
-    );
+    let radius = opts.extension_radius * h;
+    let previous: Vec<Point3<f64>>;
+    let field = match opts.departure {
+        Departure::FootPoint => extend_to_band(
+            phi,
+            samples,
+            details,
+            band + largest,
+            radius,
+            ExtendFrom::FootPoint,
+        ),
+        Departure::Arrival => {
+            previous = samples.iter().zip(details).map(|(x, w)| x - w).collect();
+            extend_to_band(phi, &previous, details, band, radius, ExtendFrom::Node)
+        }
+    };
+    let iterations = match opts.departure {
+        Departure::FootPoint => opts.fixed_point_iterations,
+        Departure::Arrival => 0,
+    };
     let mut out = phi.clone();
     let values: Vec<f32> = (0..phi.data().len())
         .into_par_iter()
@@ -67,7 +95,7 @@ pub fn advect_back(
                 return v;
             };
             let mut y = x + w0;
-            for _ in 0..opts.fixed_point_iterations {
+            for _ in 0..iterations {
                 match sample_field(phi, &field, &y) {
                     Some(w) => y = x + w,
                     None => break,
