@@ -398,6 +398,16 @@ fn histogram_tallest_bar_is_where_the_values_are() {
             panel.label,
             hist.bin_center(expected_bin)
         );
+        // The notes in the top-right corner (3 or 4 lines of 16 px) stay clear of the bars.
+        let lines = 3 + (panel.histogram.above + panel.histogram.below > 0) as i32;
+        let bar_top = (y0..y1)
+            .find(|&y| (x0..x1).any(|x| fig.image.get(x as u32, y as u32) == Some(BAR_COLOR)))
+            .unwrap();
+        assert!(
+            bar_top >= y0 + 4 + 16 * lines,
+            "bars reach row {bar_top}, notes end at {}",
+            y0 + 4 + 16 * lines
+        );
         // Its height is the count on the shared axis.
         let want = hist.counts[expected_bin] as f64 / panel.count_max * (y1 - y0) as f64;
         assert!(

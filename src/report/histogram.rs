@@ -10,7 +10,7 @@
 use super::colormap::quantile;
 use super::image::RgbImage;
 use super::render::format_value;
-use super::text::{draw_text, drawing_error, ensure_font, HAlign, FAMILY};
+use super::text::{draw_text, drawing_error, ensure_font, text_width, HAlign, FAMILY};
 use crate::{Error, Result};
 use plotters::prelude::*;
 
@@ -159,8 +159,37 @@ fn nice_ceil(x: f64) -> f64 {
         .unwrap_or(10.0 * p)
 }
 
+/// Pixel size of the panel notes: line height and the gap kept above the tallest bar.
+const NOTE_SIZE: f64 = 13.0;
+const NOTE_LINE: i32 = 16;
+
+/// The chart frame of one panel (caption, margins, label areas) on `cell`, scaled to the
+/// value axis [−half, half] and the count axis [0, count_max].
+fn build_chart<'a, DB: DrawingBackend>(
+    cell: &DrawingArea<DB, plotters::coord::Shift>,
+    label: &str,
+    half: f64,
+    count_max: f64,
+) -> Result<
+    ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+> {
+    ChartBuilder::on(cell)
+        .caption(label, (FAMILY, 18))
+        .margin(6)
+        .margin_right(14)
+        .x_label_area_size(40)
+        .y_label_area_size(52)
+        .build_cartesian_2d(-half..half, 0.0..count_max)
+        .map_err(drawing_error)
+}
+
 /// Draws one histogram per level (`(label, values)`, values in world units) as small multiples,
-/// `opts.columns` to a row. Fails if there is no level or the unit is not a positive number.
+/// `opts.columns` to a row. The count axis leaves room above the tallest bar for the panel's
+/// notes. Fails if there is no level or the unit is not a positive number.
 pub fn histogram_grid(
     levels: &[(String, Vec<f64>)],
     opts: &HistogramOptions,
@@ -187,47 +216,81 @@ pub fn histogram_grid(
         .iter()
         .map(|v| histogram(v, -half, half, opts.bins))
         .collect();
-    let top = |h: &Histogram| (*h.counts.iter().max().unwrap_or(&0)).max(1) as f64 * 1.1;
-    let shared_top = hists.iter().map(top).fold(1.0, f64::max);
-
-    let columns = opts.columns.clamp(1, levels.len());
-    let rows = levels.len().div_ceil(columns);
-    let width = (opts.panel_width.max(120) as usize * columns) as u32;
-    let height = (opts.panel_height.max(120) as usize * rows) as u32;
-    let mut image = RgbImage::new(width, height, [255, 255, 255]);
     let unit = if opts.unit_name.is_empty() {
         String::new()
     } else {
         format!(" {}", opts.unit_name)
     };
+    let notes: Vec<Vec<String>> = scaled
+        .iter()
+        .zip(&hists)
+        .map(|(values, hist)| {
+            let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+            let n = finite.len();
+            let mean_abs = finite.iter().map(|v| v.abs()).sum::<f64>() / n.max(1) as f64;
+            let sparse = finite
+                .iter()
+                .filter(|v| v.abs() < opts.sparse_threshold)
+                .count() as f64
+                / n.max(1) as f64;
+            let mut lines = vec![
+                format!("n = {n}"),
+                format!("mean |w| = {}{unit}", format_value(mean_abs)),
+                format!(
+                    "|w| < {}{unit}: {:.0}%",
+                    format_value(opts.sparse_threshold),
+                    100.0 * sparse
+                ),
+            ];
+            let beyond = hist.below + hist.above;
+            if beyond > 0 {
+                lines.push(format!("{beyond} beyond ±{}", format_value(half)));
+            }
+            lines
+        })
+        .collect();
+
+    let columns = opts.columns.clamp(1, levels.len());
+    let rows = levels.len().div_ceil(columns);
+    let (cell_w, cell_h) = (opts.panel_width.max(120), opts.panel_height.max(120));
+    let (width, height) = (cell_w * columns as u32, cell_h * rows as u32);
+
+    // The plotting area's height, from the same frame drawn on a scratch cell: the count axis
+    // is stretched so the tallest bar stays below the notes.
+    let plot_h = {
+        let mut scratch = vec![255u8; cell_w as usize * cell_h as usize * 3];
+        let area = BitMapBackend::with_buffer(&mut scratch, (cell_w, cell_h)).into_drawing_area();
+        let chart = build_chart(&area, "level", 1.0, 1.0)?;
+        let (_, yr) = chart.plotting_area().get_pixel_range();
+        (yr.end - yr.start).max(1) as f64
+    };
+    let top = |h: &Histogram, lines: usize| {
+        let reserve = (NOTE_LINE as f64 * lines as f64 + 8.0).min(0.6 * plot_h);
+        (*h.counts.iter().max().unwrap_or(&0)).max(1) as f64 * plot_h / (plot_h - reserve)
+    };
+    let max_lines = notes.iter().map(Vec::len).max().unwrap_or(0);
+    let shared_top = hists.iter().map(|h| top(h, max_lines)).fold(1.0, f64::max);
+
+    let mut image = RgbImage::new(width, height, [255, 255, 255]);
     let x_desc = if opts.unit_name.is_empty() {
         "w".to_string()
     } else {
         format!("w / {}", opts.unit_name)
     };
     let mut panels = Vec::with_capacity(levels.len());
-    // Per panel: the top-right corner of its plotting area and its notes, drawn after plotters.
-    let mut notes = Vec::with_capacity(levels.len());
     {
         let root =
             BitMapBackend::with_buffer(image.as_bytes_mut(), (width, height)).into_drawing_area();
         let cells = root.split_evenly((rows, columns));
-        for (((label, _), hist), (cell, values)) in
-            levels.iter().zip(hists).zip(cells.iter().zip(&scaled))
+        for (((label, _), hist), (cell, lines)) in
+            levels.iter().zip(hists).zip(cells.iter().zip(&notes))
         {
             let count_max = if opts.shared_counts {
                 shared_top
             } else {
-                top(&hist)
+                top(&hist, lines.len())
             };
-            let mut chart = ChartBuilder::on(cell)
-                .caption(label, (FAMILY, 18))
-                .margin(6)
-                .margin_right(14)
-                .x_label_area_size(40)
-                .y_label_area_size(52)
-                .build_cartesian_2d(-half..half, 0.0..count_max)
-                .map_err(drawing_error)?;
+            let mut chart = build_chart(cell, label, half, count_max)?;
             let tick = |v: &f64| format_value(*v);
             let count_tick = |v: &f64| format!("{:.0}", v);
             chart
@@ -256,33 +319,7 @@ pub fn histogram_grid(
                     },
                 ))
                 .map_err(drawing_error)?;
-
-            let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
-            let n = finite.len();
-            let mean_abs = finite.iter().map(|v| v.abs()).sum::<f64>() / n.max(1) as f64;
-            let sparse = finite
-                .iter()
-                .filter(|v| v.abs() < opts.sparse_threshold)
-                .count() as f64
-                / n.max(1) as f64;
-            let mut lines = vec![
-                format!("n = {n}"),
-                format!("mean |w| = {}{unit}", format_value(mean_abs)),
-                format!(
-                    "|w| < {}{unit}: {:.0}%",
-                    format_value(opts.sparse_threshold),
-                    100.0 * sparse
-                ),
-            ];
-            if hist.below + hist.above > 0 {
-                lines.push(format!(
-                    "{} beyond ±{}",
-                    hist.below + hist.above,
-                    format_value(half)
-                ));
-            }
             let (xr, yr) = chart.plotting_area().get_pixel_range();
-            notes.push((xr.end - 4, yr.start + 4, lines));
             panels.push(HistogramPanel {
                 label: label.clone(),
                 histogram: hist,
@@ -293,14 +330,24 @@ pub fn histogram_grid(
         }
         root.present().map_err(drawing_error)?;
     }
-    for (x, y, lines) in notes {
+    for (panel, lines) in panels.iter().zip(&notes) {
         for (k, line) in lines.iter().enumerate() {
+            // A white backdrop keeps grid lines from crossing the text.
+            let (x, y) = (panel.x.1 - 4, panel.y.0 + 4 + NOTE_LINE * k as i32);
+            let w = text_width(line, NOTE_SIZE).ceil() as i64;
+            image.fill_rect(
+                x as i64 - w - 2,
+                y as i64,
+                w + 6,
+                NOTE_LINE as i64,
+                [255; 3],
+            );
             draw_text(
                 &mut image,
                 line,
                 x,
-                y + 16 * k as i32,
-                13.0,
+                y,
+                NOTE_SIZE,
                 [40, 40, 40],
                 HAlign::Right,
             )?;
