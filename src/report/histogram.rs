@@ -9,8 +9,9 @@
 
 use super::colormap::quantile;
 use super::image::RgbImage;
-use super::render::format_value;
-use super::text::{draw_text, drawing_error, ensure_font, text_width, HAlign, FAMILY};
+use super::text::{
+    draw_text, drawing_error, ensure_font, format_value, text_width, HAlign, FAMILY,
+};
 use crate::{Error, Result};
 use plotters::prelude::*;
 

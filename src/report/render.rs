@@ -14,7 +14,7 @@
 
 use super::colormap::ColorMap;
 use super::image::RgbImage;
-use super::text::{draw_text, text_width, HAlign};
+use super::text::{draw_text, format_value, text_width, HAlign};
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
 
@@ -418,25 +418,6 @@ fn draw_colorbar(
         )?;
     }
     Ok(())
-}
-
-/// A short decimal form of a tick value (3 significant digits, no "-0").
-pub(crate) fn format_value(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return if v.is_nan() { "NaN".into() } else { "0".into() };
-    }
-    let digits = (2 - v.abs().log10().floor() as i32).clamp(0, 6) as usize;
-    let s = format!("{v:.digits$}");
-    let s = if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    };
-    if s == "-0" {
-        "0".into()
-    } else {
-        s
-    }
 }
 
 /// Scan-converts the mesh with the given frame, image-plane `bounds` (whose centre goes to the

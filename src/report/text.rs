@@ -4,7 +4,7 @@
 //! `src/report/NOTO_SANS_LICENSE.txt`). Free text (titles, colour-bar labels, panel notes) is laid out and rasterised here
 //! with `ab_glyph` (advances, kerning, side bearings, anti-aliased coverage blended over the
 //! image); chart axes go through `plotters`, for which the same font is registered once under
-//! the family name "sans-serif".
+//! the family name "sans-serif". Numbers on figures are written by [`format_value`].
 
 use super::image::RgbImage;
 use crate::{Error, Result};
@@ -127,4 +127,23 @@ pub(crate) fn draw_text(
         prev = Some(id);
     }
     Ok(())
+}
+
+/// A short decimal form of a tick value (3 significant digits, no "-0").
+pub(crate) fn format_value(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return if v.is_nan() { "NaN".into() } else { "0".into() };
+    }
+    let digits = (2 - v.abs().log10().floor() as i32).clamp(0, 6) as usize;
+    let s = format!("{v:.digits$}");
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    };
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
 }
