@@ -14,6 +14,7 @@ pub mod io;
 pub mod levelset;
 pub mod mesh;
 pub mod msr;
+pub mod report;
 
 pub use error::{Error, Result};
 pub use mesh::TriMesh;

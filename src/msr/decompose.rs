@@ -1,0 +1,217 @@
+//! Decomposition (MST, paper Algorithm 1): from a mesh and its signed distance grid φ_0, the
+//! multiscale representation {W_1..W_N, φ_T}.
+//!
+//! The samples X_0 are the mesh vertices plus lattice points where the mesh is coarser than
+//! `sample_spacing` voxels ([`super::sample`]). The levels are t_i = i·T/N. For each level, φ
+//! is evolved from t_{i−1} to t_i by the chosen [`Velocity`] (threshold dynamics,
+//! [`crate::motion`]), redistanced over the whole grid (so the projection sees a true distance
+//! however far the samples must travel), and X_{i−1} is projected orthogonally onto its zero
+//! level set by Newton steps ([`super::project`]): X_i, W_i = X_i − X_{i−1}, and the scalar
+//! detail w_i = W_i·n_i with n_i = ∇φ(t_i)/|∇φ(t_i)| at X_i (positive outward).
+
+use super::project::{project_to_zero_level, LevelProjectOptions};
+use super::sample::sample_for_spacing;
+use super::{Msr, MsrParams};
+use crate::grid::Grid3;
+use crate::levelset::redistance::{redistance, RedistanceOptions};
+use crate::motion::flow::{Flow, FlowOptions, StepReport};
+use crate::motion::velocity::Velocity;
+use crate::{Error, Result, TriMesh};
+use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
+
+/// Options of [`decompose`].
+#[derive(Debug, Clone)]
+pub struct DecomposeOptions {
+    /// Number of levels N.
+    pub levels: usize,
+    /// Total time T, world length²; `None`: N·(2h)² — each level then smooths away features of
+    /// about 2h more radius (a sphere of radius ρ vanishes under mean curvature flow at ρ²/4).
+    pub time: Option<f64>,
+    /// The motion between levels (the paper's Figure 1 uses `vpmcf`).
+    pub velocity: Velocity,
+    /// Time step, world length²; `None`: 2h², or less so that each level has a whole number of
+    /// equal steps.
+    pub dt: Option<f64>,
+    /// Largest distance between samples on the input (voxels).
+    pub sample_spacing: f64,
+    /// Newton projection onto each level set.
+    pub projection: LevelProjectOptions,
+    /// The flow's own options.
+    pub flow: FlowOptions,
+    /// Keep φ(t_i) of every level in [`Decomposition::level_sets`] (for measuring the
+    /// reconstruction; costs one grid per level).
+    pub keep_level_sets: bool,
+}
+
+impl Default for DecomposeOptions {
+    fn default() -> Self {
+        DecomposeOptions {
+            levels: 5,
+            time: None,
+            velocity: Velocity::VolumePreserving,
+            dt: None,
+            sample_spacing: 1.0,
+            projection: LevelProjectOptions::default(),
+            flow: FlowOptions::default(),
+            keep_level_sets: false,
+        }
+    }
+}
+
+/// Per-level figures of a decomposition.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct LevelReport {
+    /// Level i (1..=N).
+    pub level: usize,
+    /// t_i, world length².
+    pub time: f64,
+    /// Number of samples.
+    pub samples: usize,
+    /// Mean |w_i|, world units.
+    pub mean_abs_detail: f64,
+    /// Fraction of samples with |w_i| < 0.1h.
+    pub sparse_fraction: f64,
+    /// Samples whose Newton projection did not reach the tolerance (they keep the best point).
+    pub unconverged: usize,
+    /// Sub-voxel volume of {φ(t_i) < 0}, world units³.
+    pub volume: f64,
+    /// Area of the zero level set of φ(t_i), world units².
+    pub area: f64,
+}
+
+/// The result of [`decompose`].
+#[derive(Debug, Clone)]
+pub struct Decomposition {
+    pub msr: Msr,
+    /// Levels 1..=N.
+    pub reports: Vec<LevelReport>,
+    /// φ(t_0) .. φ(t_N) when [`DecomposeOptions::keep_level_sets`] is set, else empty.
+    pub level_sets: Vec<Grid3>,
+}
+
+/// The resolved time, step and steps per level for `opts` on a grid of voxel `h`.
+pub fn level_schedule(opts: &DecomposeOptions, h: f64) -> Result<(f64, f64, usize)> {
+    if opts.levels == 0 {
+        return Err(Error::Geometry("the number of levels must be at least 1".into()));
+    }
+    let time = opts.time.unwrap_or(opts.levels as f64 * 4.0 * h * h);
+    if !(time.is_finite() && time > 0.0) {
+        return Err(Error::Geometry(format!(
+            "the decomposition time must be positive and finite (world length²), got {time}"
+        )));
+    }
+    let per_level = time / opts.levels as f64;
+    let dt = opts.dt.unwrap_or(2.0 * h * h);
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(Error::Geometry(format!(
+            "the time step must be positive and finite (world length²), got {dt}"
+        )));
+    }
+    // Below a quarter of h² per level the motion is within the redistancer's noise.
+    let min_level = 0.25 * h * h;
+    if per_level < min_level {
+        return Err(Error::Geometry(format!(
+            "{} levels in a time of {time:.4e} leave {per_level:.3e} per level, less than \
+             0.25 h² = {min_level:.3e} (h = {h:.4e}): use fewer levels or a longer --time",
+            opts.levels
+        )));
+    }
+    let steps = (per_level / dt * (1.0 - 1e-9)).ceil().max(1.0) as usize;
+    Ok((time, per_level / steps as f64, steps))
+}
+
+/// Decomposes `mesh`, whose signed distance grid is `phi` (negative inside), into its multiscale
+/// representation (see the module doc). `progress(level, step)` is called after every flow step.
+///
+/// Errors: invalid options ([`level_schedule`]), and the flow's errors — among them the shape
+/// vanishing before T (the message gives the time).
+pub fn decompose(
+    mesh: &TriMesh,
+    mut phi: Grid3,
+    opts: &DecomposeOptions,
+    mut progress: impl FnMut(usize, &StepReport),
+) -> Result<Decomposition> {
+    let h = phi.voxel();
+    let (time, dt, steps_per_level) = level_schedule(opts, h)?;
+    let samples = sample_for_spacing(mesh, opts.sample_spacing * h);
+    redistance(&mut phi, &RedistanceOptions::default())?;
+    let mut level_sets = Vec::new();
+    if opts.keep_level_sets {
+        level_sets.push(phi.clone());
+    }
+    let mut flow = Flow::new(opts.velocity, dt, opts.flow.clone())?;
+    let mut x = samples.points.clone();
+    let mut details = Vec::with_capacity(opts.levels);
+    let mut normal_details = Vec::with_capacity(opts.levels);
+    let mut reports = Vec::with_capacity(opts.levels);
+    let mut times = vec![0.0];
+    for level in 1..=opts.levels {
+        let mut last = None;
+        for _ in 0..steps_per_level {
+            let r = flow.step(&mut phi)?;
+            progress(level, &r);
+            last = Some(r);
+        }
+        let last = last.expect("at least one step per level");
+        redistance(&mut phi, &RedistanceOptions::default())?;
+        let projected = project_to_zero_level(&phi, &x, &opts.projection);
+        let unconverged = projected.iter().filter(|p| !p.converged).count();
+        let next: Vec<Point3<f64>> = projected.iter().map(|p| p.point).collect();
+        let w: Vec<Vector3<f64>> = next.iter().zip(&x).map(|(a, b)| a - b).collect();
+        let wn: Vec<f64> = next
+            .par_iter()
+            .zip(&w)
+            .map(|(p, d)| {
+                phi.gradient_tricubic(p)
+                    .and_then(|g| g.try_normalize(1e-12))
+                    .map_or(0.0, |n| d.dot(&n))
+            })
+            .collect();
+        let mean_abs = wn.iter().map(|v| v.abs()).sum::<f64>() / wn.len().max(1) as f64;
+        let sparse = wn.iter().filter(|v| v.abs() < 0.1 * h).count() as f64 / wn.len().max(1) as f64;
+        reports.push(LevelReport {
+            level,
+            time: last.time,
+            samples: x.len(),
+            mean_abs_detail: mean_abs,
+            sparse_fraction: sparse,
+            unconverged,
+            volume: last.volume,
+            area: last.area,
+        });
+        times.push(level as f64 * time / opts.levels as f64);
+        details.push(w);
+        normal_details.push(wn);
+        x = next;
+        if opts.keep_level_sets {
+            level_sets.push(phi.clone());
+        }
+    }
+    let msr = Msr {
+        faces: mesh.faces.clone(),
+        num_vertices: samples.num_vertices,
+        extra_face: samples.extra_face,
+        extra_bary: samples.extra_bary,
+        samples: x,
+        details,
+        normal_details,
+        times,
+        phi,
+        params: MsrParams {
+            velocity: opts.velocity.name().into(),
+            c: opts.velocity.speed().unwrap_or(0.0),
+            time,
+            levels: opts.levels,
+            dt,
+            voxel: h,
+            projection_tolerance_voxels: opts.projection.tolerance,
+            software: format!("vesselmsr {}", env!("CARGO_PKG_VERSION")),
+        },
+    };
+    Ok(Decomposition {
+        msr,
+        reports,
+        level_sets,
+    })
+}
