@@ -13,6 +13,7 @@ pub mod grid;
 pub mod io;
 pub mod levelset;
 pub mod mesh;
+pub mod motion;
 
 pub use error::{Error, Result};
 pub use mesh::TriMesh;
