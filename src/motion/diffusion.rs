@@ -26,9 +26,15 @@
 //!   exactly. The mirror boundary is exact: the mirrored line is periodic of period 2n, and the
 //!   state each recursion would have on it follows in closed form from the states reached from
 //!   rest (see `RecursiveAxis`). Accumulated in f64: within ~3e-6 of the peak of the sampled
-//!   Gaussian at every σ ≥ 1 voxel.
-//! * [`DiffusionKernel::Auto`] (default): truncated up to σ = [`AUTO_RECURSIVE_FROM_SIGMA`]
-//!   voxels, recursive beyond, from measured cost and accuracy (see the constant).
+//!   Gaussian at any σ (1e-5 of the peak at σ = ¼ voxel, 1e-6 at σ = 3).
+//! * [`DiffusionKernel::Auto`] (default): truncated below σ = [`AUTO_RECURSIVE_FROM_SIGMA`]
+//!   voxels, recursive from there on.
+//!
+//! Measured on a 256³ grid (2 cores, shared machine; benches/motion.rs): the truncated kernel
+//! costs ∝ σ (≈ 35, 50, 70, 160 ms at σ = 1, 2, 4, 8 voxels on an idle machine), the recursive
+//! one ≈ 160–200 ms whatever σ; they cross between σ = 9 and 12 voxels. Both match scipy's
+//! `gaussian_filter` (mode "reflect") to f32 rounding (truncated, same cut) or to ~3e-6 of the
+//! kernel's peak (recursive, against an uncut Gaussian).
 
 use crate::grid::{Grid3, SubBox};
 use crate::{Error, Result};
@@ -38,12 +44,8 @@ use rayon::prelude::*;
 pub const DEFAULT_RADIUS_SIGMAS: f64 = 4.0;
 
 /// [`DiffusionKernel::Auto`] uses the truncated kernel (ρ = 4) below this σ, in voxels, and the
-/// recursive filter from it on.
-pub const AUTO_RECURSIVE_FROM_SIGMA: f64 = 6.0;
-
-/// Below this σ (voxels) the recursive filter is not used (its approximation of the Gaussian
-/// degrades): [`DiffusionKernel::Recursive`] falls back to the truncated kernel (ρ = 4).
-pub const RECURSIVE_MIN_SIGMA: f64 = 1.0;
+/// recursive filter from it on (where the two cost about the same on a 256³ grid).
+pub const AUTO_RECURSIVE_FROM_SIGMA: f64 = 10.0;
 
 /// Lines filtered together by the recursive x pass.
 const X_BUNDLE: usize = 8;
@@ -66,8 +68,7 @@ pub enum DiffusionKernel {
         radius_sigmas: f64,
     },
     /// Sixth-order recursive (Deriche-form) Gaussian: cost independent of σ, within ~3e-6 of the
-    /// peak of the sampled Gaussian.
-    /// Falls back to the truncated kernel below σ = [`RECURSIVE_MIN_SIGMA`] voxels.
+    /// peak of the sampled Gaussian at any σ.
     Recursive,
 }
 
@@ -165,9 +166,6 @@ impl Plan {
             DiffusionKernel::Auto if sigma < AUTO_RECURSIVE_FROM_SIGMA => {
                 truncated(DEFAULT_RADIUS_SIGMAS)
             }
-            DiffusionKernel::Recursive if sigma < RECURSIVE_MIN_SIGMA => {
-                truncated(DEFAULT_RADIUS_SIGMAS)
-            }
             DiffusionKernel::Auto | DiffusionKernel::Recursive => {
                 Ok(Plan::Recursive(Recursive::new(sigma)))
             }
@@ -239,8 +237,9 @@ fn xy_truncated(data: &mut [f32], dims: [usize; 3], w: &[f32]) {
             if nx > 1 {
                 for out in slab.chunks_exact_mut(nx) {
                     padded.clear();
-                    padded
-                        .extend((0..nx + 2 * r).map(|p| out[reflect(p as isize - r as isize, nx)]));
+                    padded.extend((0..r).map(|p| out[reflect(p as isize - r as isize, nx)]));
+                    padded.extend_from_slice(out);
+                    padded.extend((0..r).map(|p| out[reflect((nx + p) as isize, nx)]));
                     scale_into(out, w[0], &padded[r..r + nx]);
                     for (t, &wt) in w.iter().enumerate().skip(1) {
                         add_pair(
@@ -320,7 +319,7 @@ const TERMS: [Term; 3] = [
 ];
 
 /// The correction of a section's start state is dropped once |λ|^m falls below this.
-const TAIL: f64 = 1e-12;
+const TAIL: f64 = 1e-10;
 
 /// A complex number (re, im) — the few operations the sections need.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -439,6 +438,14 @@ impl RecursiveAxis {
         }
     }
 
+    /// (Re α, Im α, Re λ, Im λ) of each section.
+    fn coefficients(&self) -> [[f64; 4]; 3] {
+        [0, 1, 2].map(|k| {
+            let s = &self.sections[k];
+            [s.alpha.0, s.alpha.1, s.lambda.0, s.lambda.1]
+        })
+    }
+
     /// Filters `lanes` lines: `x` holds them (n·lanes values), `out` receives the result.
     /// `state` is scratch.
     fn filter(&self, x: &[f64], lanes: usize, out: &mut [f64], state: &mut Vec<f64>) {
@@ -447,52 +454,79 @@ impl RecursiveAxis {
         // Per section: forward end state F (re, im), backward end state G (re, im).
         state.clear();
         state.resize(12 * l, 0.0);
-        out.fill(0.0);
         let (fwd, bwd) = state.split_at_mut(6 * l);
-        for (sec, f) in self.sections.iter().zip(fwd.chunks_exact_mut(2 * l)) {
-            let (yr, yi) = f.split_at_mut(l);
-            for q in 0..n {
-                step(sec, &x[q * l..][..l], yr, yi, &mut out[q * l..][..l]);
-            }
+        let c = self.coefficients();
+        for q in 0..n {
+            step(&c, &x[q * l..][..l], fwd, &mut out[q * l..][..l], None);
         }
-        for (sec, g) in self.sections.iter().zip(bwd.chunks_exact_mut(2 * l)) {
-            let (yr, yi) = g.split_at_mut(l);
-            for q in (0..n).rev() {
-                step(sec, &x[q * l..][..l], yr, yi, &mut out[q * l..][..l]);
-            }
+        for q in (0..n).rev() {
+            step(
+                &c,
+                &x[q * l..][..l],
+                bwd,
+                &mut out[q * l..][..l],
+                Some(self.h0),
+            );
         }
-        for (o, &v) in out.iter_mut().zip(x) {
-            *o -= self.h0 * v;
-        }
-        // Start states on the periodic line, and their free responses.
+        // Start states on the periodic line, s before node 0 (in place of F) and t after node
+        // n − 1 (in place of G), and their free responses.
         for (k, sec) in self.sections.iter().enumerate() {
-            let m = sec.powers.len();
+            let (fr, rest) = fwd[2 * k * l..].split_at_mut(l);
+            let fi = &mut rest[..l];
+            let (gr, rest) = bwd[2 * k * l..].split_at_mut(l);
+            let gi = &mut rest[..l];
             for lane in 0..l {
-                let f = C(fwd[2 * k * l + lane], fwd[(2 * k + 1) * l + lane]);
-                let g = C(bwd[2 * k * l + lane], bwd[(2 * k + 1) * l + lane]);
+                let f = C(fr[lane], fi[lane]);
+                let g = C(gr[lane], gi[lane]);
                 let s = g.add(sec.lambda_n.mul(f)).mul(sec.periodic);
                 let t = f.add(sec.lambda_n.mul(s));
-                for (q, p) in sec.powers.iter().enumerate() {
-                    // λ^(q+1)·s at node q, λ^(q+1)·t at node n − 1 − q.
-                    out[q * l + lane] += p.mul(s).0;
-                    out[(n - 1 - q) * l + lane] += p.mul(t).0;
+                (fr[lane], fi[lane], gr[lane], gi[lane]) = (s.0, s.1, t.0, t.1);
+            }
+            for (q, p) in sec.powers.iter().enumerate() {
+                // λ^(q+1)·s at node q, λ^(q+1)·t at node n − 1 − q.
+                let head = &mut out[q * l..][..l];
+                for ((o, &sr), &si) in head.iter_mut().zip(&*fr).zip(&*fi) {
+                    *o += p.0 * sr - p.1 * si;
                 }
-                debug_assert!(m <= n);
+                let tail = &mut out[(n - 1 - q) * l..][..l];
+                for ((o, &tr), &ti) in tail.iter_mut().zip(&*gr).zip(&*gi) {
+                    *o += p.0 * tr - p.1 * ti;
+                }
             }
         }
     }
 }
 
-/// One step of a section over a row of lanes: y ← α·x + λ·y; out += Re y.
+/// One step of the three sections over a row of lanes: y_k ← α_k·x + λ_k·y_k (`state`: re and im
+/// of y_0, y_1, y_2, `lanes` values each); then out = Σ Re y_k (forward, `h0` None) or
+/// out += Σ Re y_k − h0·x (backward).
 #[inline]
-fn step(sec: &AxisSection, x: &[f64], yr: &mut [f64], yi: &mut [f64], out: &mut [f64]) {
-    let (C(ar, ai), C(lr, li)) = (sec.alpha, sec.lambda);
-    for (((&x, yr), yi), o) in x.iter().zip(yr).zip(yi).zip(out) {
-        let r = ar * x + lr * *yr - li * *yi;
-        let i = ai * x + lr * *yi + li * *yr;
-        *yr = r;
-        *yi = i;
-        *o += r;
+fn step(c: &[[f64; 4]; 3], x: &[f64], state: &mut [f64], out: &mut [f64], h0: Option<f64>) {
+    let l = x.len();
+    let (r0, rest) = state.split_at_mut(l);
+    let (i0, rest) = rest.split_at_mut(l);
+    let (r1, rest) = rest.split_at_mut(l);
+    let (i1, rest) = rest.split_at_mut(l);
+    let (r2, i2) = rest.split_at_mut(l);
+    let (i2, out) = (&mut i2[..l], &mut out[..l]);
+    let [[ar0, ai0, lr0, li0], [ar1, ai1, lr1, li1], [ar2, ai2, lr2, li2]] = *c;
+    let (keep, minus) = match h0 {
+        None => (0.0, 0.0),
+        Some(h) => (1.0, h),
+    };
+    for lane in 0..l {
+        let v = x[lane];
+        let (a0, b0) = (r0[lane], i0[lane]);
+        let (a1, b1) = (r1[lane], i1[lane]);
+        let (a2, b2) = (r2[lane], i2[lane]);
+        let n0 = ar0 * v + lr0 * a0 - li0 * b0;
+        let n1 = ar1 * v + lr1 * a1 - li1 * b1;
+        let n2 = ar2 * v + lr2 * a2 - li2 * b2;
+        i0[lane] = ai0 * v + lr0 * b0 + li0 * a0;
+        i1[lane] = ai1 * v + lr1 * b1 + li1 * a1;
+        i2[lane] = ai2 * v + lr2 * b2 + li2 * a2;
+        (r0[lane], r1[lane], r2[lane]) = (n0, n1, n2);
+        out[lane] = keep * out[lane] + (n0 + n1 + n2) - minus * v;
     }
 }
 
