@@ -51,8 +51,8 @@ pub const AUTO_RECURSIVE_FROM_SIGMA: f64 = 10.0;
 const X_BUNDLE: usize = 8;
 /// Lines (x-contiguous nodes) filtered together by the recursive y and z passes.
 const LANE_BLOCK: usize = 64;
-/// Nodes of a slab processed together by the truncated z pass.
-const Z_TILE: usize = 1024;
+/// x-contiguous nodes of a slab filtered together by the truncated z pass.
+const Z_TILE: usize = 128;
 
 /// How the Gaussian is applied.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -96,8 +96,7 @@ pub fn diffuse(grid: &mut Grid3, time: f64, opts: &DiffusionOptions) -> Result<(
         Plan::Truncated(w) => {
             xy_truncated(grid.data_mut(), dims, &w);
             if dims[2] > 1 {
-                let out = z_truncated(grid.data(), dims, &w);
-                *grid = Grid3::from_data(dims, *grid.transform(), out)?;
+                z_truncated(grid.data_mut(), dims, &w);
             }
         }
         Plan::Recursive(rec) => {
@@ -255,33 +254,48 @@ fn xy_truncated(data: &mut [f32], dims: [usize; 3], w: &[f32]) {
     );
 }
 
-/// The z pass of the truncated kernel, out of place. Each task owns a run of output slabs and
-/// walks them tile by tile, so the input tiles it reads stay in cache across its slabs.
-fn z_truncated(src: &[f32], dims: [usize; 3], w: &[f32]) -> Vec<f32> {
+/// The z pass of the truncated kernel, in place: each task takes one column of tiles (the same
+/// [`Z_TILE`] x-contiguous nodes of every slab), copies it with its mirror margins and filters
+/// it back.
+fn z_truncated(data: &mut [f32], dims: [usize; 3], w: &[f32]) {
     let [nx, ny, nz] = dims;
-    let slab = nx * ny;
-    let mut out = vec![0.0f32; src.len()];
-    let per_task = (nz / (4 * rayon::current_num_threads())).clamp(1, 32);
-    out.par_chunks_mut(slab * per_task)
-        .enumerate()
-        .for_each(|(c, chunk)| {
-            let k0 = c * per_task;
-            for t0 in (0..slab).step_by(Z_TILE) {
-                let t1 = (t0 + Z_TILE).min(slab);
-                let tile = |k: isize| &src[reflect(k, nz) * slab..][t0..t1];
-                for (kk, out_slab) in chunk.chunks_exact_mut(slab).enumerate() {
-                    let k = (k0 + kk) as isize;
-                    let out = &mut out_slab[t0..t1];
-                    scale_into(out, w[0], tile(k));
-                    for (t, &wt) in w.iter().enumerate().skip(1) {
-                        add_pair(out, wt, tile(k - t as isize), tile(k + t as isize));
-                    }
+    let r = w.len() - 1;
+    column_tiles(data, nx * ny, Z_TILE)
+        .into_par_iter()
+        .for_each_init(Vec::new, |buf: &mut Vec<f32>, mut column| {
+            let width = column[0].len();
+            buf.clear();
+            for p in 0..nz + 2 * r {
+                buf.extend_from_slice(column[reflect(p as isize - r as isize, nz)]);
+            }
+            let row = |p: usize| &buf[p * width..][..width];
+            for (k, out) in column.iter_mut().enumerate() {
+                let c = k + r;
+                scale_into(out, w[0], row(c));
+                for (t, &wt) in w.iter().enumerate().skip(1) {
+                    add_pair(out, wt, row(c - t), row(c + t));
                 }
             }
         });
-    out
 }
 
+/// The nodes of `data` (slabs of `slab` nodes) as columns of tiles: column c holds, for each
+/// slab in order, its nodes c·tile..(c+1)·tile (fewer in the last column), mutably — so the
+/// columns can go to different tasks.
+fn column_tiles(data: &mut [f32], slab: usize, tile: usize) -> Vec<Vec<&mut [f32]>> {
+    let nz = data.len() / slab;
+    let mut columns: Vec<Vec<&mut [f32]>> = (0..slab.div_ceil(tile))
+        .map(|_| Vec::with_capacity(nz))
+        .collect();
+    for s in data.chunks_mut(slab) {
+        for (c, t) in s.chunks_mut(tile).enumerate() {
+            columns[c].push(t);
+        }
+    }
+    columns
+}
+
+// ------------------------------------------------------------------------------------------
 // Recursive filter: three complex first-order sections, forward and backward
 // ------------------------------------------------------------------------------------------
 
@@ -610,35 +624,26 @@ fn xy_recursive(data: &mut [f32], dims: [usize; 3], rec: &Recursive) {
         });
 }
 
-/// The z pass of the recursive filter, in place: each task filters a block of [`LANE_BLOCK`]
-/// nodes of one row j through all slabs (x-contiguous reads), then the results are written
-/// back slab by slab in parallel.
+/// The z pass of the recursive filter, in place: each task filters one column of tiles (the
+/// same [`LANE_BLOCK`] x-contiguous nodes of every slab).
 fn z_recursive(data: &mut [f32], dims: [usize; 3], rec: &Recursive) {
     let [nx, ny, nz] = dims;
-    let slab = nx * ny;
     let az = RecursiveAxis::new(rec, nz);
-    let blocks = nx.div_ceil(LANE_BLOCK);
-    let src: &[f32] = data;
-    let columns: Vec<Vec<f32>> = (0..ny * blocks)
+    column_tiles(data, nx * ny, LANE_BLOCK)
         .into_par_iter()
-        .map_init(Scratch::default, |sc, task| {
-            let (j, i0) = (task / blocks, (task % blocks) * LANE_BLOCK);
-            let lanes = LANE_BLOCK.min(nx - i0);
+        .for_each_init(Scratch::default, |sc, mut column| {
+            let lanes = column[0].len();
             sc.prepare(nz * lanes);
-            for (k, row) in sc.x.chunks_exact_mut(lanes).enumerate() {
-                for (v, &s) in row.iter_mut().zip(&src[k * slab + j * nx + i0..][..lanes]) {
+            for (row, tile) in sc.x.chunks_exact_mut(lanes).zip(&column) {
+                for (v, &s) in row.iter_mut().zip(tile.iter()) {
                     *v = f64::from(s);
                 }
             }
             sc.run(&az, lanes);
-            sc.out.iter().map(|&v| v as f32).collect()
-        })
-        .collect();
-    data.par_chunks_mut(slab).enumerate().for_each(|(k, out)| {
-        for (task, column) in columns.iter().enumerate() {
-            let (j, i0) = (task / blocks, (task % blocks) * LANE_BLOCK);
-            let lanes = column.len() / nz;
-            out[j * nx + i0..][..lanes].copy_from_slice(&column[k * lanes..][..lanes]);
-        }
-    });
+            for (row, tile) in sc.out.chunks_exact(lanes).zip(column.iter_mut()) {
+                for (s, &v) in tile.iter_mut().zip(row) {
+                    *s = v as f32;
+                }
+            }
+        });
 }
