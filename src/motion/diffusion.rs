@@ -47,6 +47,11 @@ pub const DEFAULT_RADIUS_SIGMAS: f64 = 4.0;
 /// recursive filter from it on (where the two cost about the same on a 256³ grid).
 pub const AUTO_RECURSIVE_FROM_SIGMA: f64 = 10.0;
 
+/// The recursive filter takes σ (voxels) as at most this (its poles would round to 1 beyond
+/// ~1e15): already the mean of every line, to f32 precision, on axes of up to 1e6 nodes.
+const RECURSIVE_MAX_SIGMA: f64 = 1e8;
+/// Widest truncated kernel, in nodes on each side (its weights are computed one by one).
+pub const MAX_RADIUS: usize = 1 << 24;
 /// Lines filtered together by the recursive x pass.
 const X_BUNDLE: usize = 8;
 /// Lines (x-contiguous nodes) filtered together by the recursive y and z passes.
@@ -62,7 +67,8 @@ pub enum DiffusionKernel {
     #[default]
     Auto,
     /// Sampled Gaussian cut at ⌊radius_sigmas·σ + ½⌋ nodes on each side (in σ, so
-    /// independent of the voxel size), normalised to sum 1. Cost grows with σ.
+    /// independent of the voxel size), normalised to sum 1. Cost grows with σ up to the axis
+    /// length (a wider kernel is folded onto the axis); an error beyond [`MAX_RADIUS`] nodes.
     Truncated {
         /// Half-width of the kernel in standard deviations (4 matches scipy's default).
         radius_sigmas: f64,
@@ -94,9 +100,10 @@ pub fn diffuse(grid: &mut Grid3, time: f64, opts: &DiffusionOptions) -> Result<(
     match plan {
         Plan::Identity => {}
         Plan::Truncated(w) => {
-            xy_truncated(grid.data_mut(), dims, &w);
+            let [wx, wy, wz] = dims.map(|n| fold_weights(&w, n));
+            xy_truncated(grid.data_mut(), dims, &wx, &wy);
             if dims[2] > 1 {
-                z_truncated(grid.data_mut(), dims, &w);
+                z_truncated(grid.data_mut(), dims, &wz);
             }
         }
         Plan::Recursive(rec) => {
@@ -130,7 +137,7 @@ enum Plan {
     /// σ so small that the truncated kernel is the single weight 1.
     Identity,
     /// Half of a symmetric kernel: w[0] at the centre, w[t] at ±t.
-    Truncated(Vec<f32>),
+    Truncated(Vec<f64>),
     Recursive(Recursive),
 }
 
@@ -153,7 +160,14 @@ impl Plan {
                     "kernel radius must be positive and finite (in σ), got {radius_sigmas}"
                 )));
             }
-            let w = truncated_weights(sigma, radius_sigmas);
+            let radius = (radius_sigmas * sigma + 0.5).floor();
+            if radius > MAX_RADIUS as f64 {
+                return Err(Error::Geometry(format!(
+                    "a truncated kernel of {radius_sigmas}σ with σ = {sigma} voxels is {radius} \
+                     nodes wide (at most {MAX_RADIUS}); use the recursive kernel"
+                )));
+            }
+            let w = truncated_weights(sigma, radius as usize);
             Ok(if w.len() == 1 {
                 Plan::Identity
             } else {
@@ -165,9 +179,9 @@ impl Plan {
             DiffusionKernel::Auto if sigma < AUTO_RECURSIVE_FROM_SIGMA => {
                 truncated(DEFAULT_RADIUS_SIGMAS)
             }
-            DiffusionKernel::Auto | DiffusionKernel::Recursive => {
-                Ok(Plan::Recursive(Recursive::new(sigma)))
-            }
+            DiffusionKernel::Auto | DiffusionKernel::Recursive => Ok(Plan::Recursive(
+                Recursive::new(sigma.min(RECURSIVE_MAX_SIGMA)),
+            )),
         }
     }
 }
@@ -187,15 +201,32 @@ fn reflect(i: isize, n: usize) -> usize {
 // Truncated kernel
 // ------------------------------------------------------------------------------------------
 
-/// w[0..=r] of the normalised sampled Gaussian of `sigma` voxels cut at r = ⌊ρσ + ½⌋.
-fn truncated_weights(sigma: f64, radius_sigmas: f64) -> Vec<f32> {
-    // Bounded so a huge σ cannot ask for an absurd allocation; far beyond any grid anyway.
-    let r = (radius_sigmas * sigma + 0.5).floor().min(1e7) as usize;
+/// w[0..=r] of the sampled Gaussian of `sigma` voxels cut at r nodes, normalised.
+fn truncated_weights(sigma: f64, r: usize) -> Vec<f64> {
     let w: Vec<f64> = (0..=r)
         .map(|t| (-0.5 * (t as f64 / sigma).powi(2)).exp())
         .collect();
     let sum = w[0] + 2.0 * w[1..].iter().sum::<f64>();
-    w.iter().map(|&v| (v / sum) as f32).collect()
+    w.iter().map(|&v| v / sum).collect()
+}
+
+/// The half-kernel `w` as applied along an axis of `n` nodes. Unchanged when shorter than the
+/// axis; otherwise wrapped onto the period 2n of the mirrored line (the mirror folds the kernel
+/// back onto itself): radius n, with the weight at ±n halved since both offsets reach the same
+/// node. So a kernel far wider than the grid costs no more than one as wide as the axis.
+fn fold_weights(w: &[f64], n: usize) -> Vec<f32> {
+    let r = w.len() - 1;
+    if r < n {
+        return w.iter().map(|&v| v as f32).collect();
+    }
+    let period = 2 * n as isize;
+    let mut circular = vec![0.0f64; 2 * n];
+    for o in -(r as isize)..=r as isize {
+        circular[o.rem_euclid(period) as usize] += w[o.unsigned_abs()];
+    }
+    let mut half: Vec<f32> = circular[..=n].iter().map(|&v| v as f32).collect();
+    half[n] *= 0.5;
+    half
 }
 
 /// out = w0·centre.
@@ -215,9 +246,9 @@ fn add_pair(out: &mut [f32], w: f32, a: &[f32], b: &[f32]) {
 }
 
 /// The x and y passes of the truncated kernel, in place, slab (fixed z) by slab in parallel.
-fn xy_truncated(data: &mut [f32], dims: [usize; 3], w: &[f32]) {
+fn xy_truncated(data: &mut [f32], dims: [usize; 3], wx: &[f32], wy: &[f32]) {
     let [nx, ny, _] = dims;
-    let r = w.len() - 1;
+    let r = wx.len() - 1;
     data.par_chunks_mut(nx * ny).for_each_init(
         || (Vec::new(), Vec::new()),
         |(scratch, padded): &mut (Vec<f32>, Vec<f32>), slab| {
@@ -227,8 +258,8 @@ fn xy_truncated(data: &mut [f32], dims: [usize; 3], w: &[f32]) {
                 let row = |j: isize| &scratch[reflect(j, ny) * nx..][..nx];
                 for (j, out) in slab.chunks_exact_mut(nx).enumerate() {
                     let j = j as isize;
-                    scale_into(out, w[0], row(j));
-                    for (t, &wt) in w.iter().enumerate().skip(1) {
+                    scale_into(out, wy[0], row(j));
+                    for (t, &wt) in wy.iter().enumerate().skip(1) {
                         add_pair(out, wt, row(j - t as isize), row(j + t as isize));
                     }
                 }
@@ -239,8 +270,8 @@ fn xy_truncated(data: &mut [f32], dims: [usize; 3], w: &[f32]) {
                     padded.extend((0..r).map(|p| out[reflect(p as isize - r as isize, nx)]));
                     padded.extend_from_slice(out);
                     padded.extend((0..r).map(|p| out[reflect((nx + p) as isize, nx)]));
-                    scale_into(out, w[0], &padded[r..r + nx]);
-                    for (t, &wt) in w.iter().enumerate().skip(1) {
+                    scale_into(out, wx[0], &padded[r..r + nx]);
+                    for (t, &wt) in wx.iter().enumerate().skip(1) {
                         add_pair(
                             out,
                             wt,
