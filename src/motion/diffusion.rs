@@ -30,11 +30,11 @@
 //! * [`DiffusionKernel::Auto`] (default): truncated below σ = [`AUTO_RECURSIVE_FROM_SIGMA`]
 //!   voxels, recursive from there on.
 //!
-//! Measured on a 256³ grid (2 cores, shared machine; benches/motion.rs): the truncated kernel
-//! costs ∝ σ (≈ 35, 50, 70, 160 ms at σ = 1, 2, 4, 8 voxels on an idle machine), the recursive
-//! one ≈ 160–200 ms whatever σ; they cross between σ = 9 and 12 voxels. Both match scipy's
-//! `gaussian_filter` (mode "reflect") to f32 rounding (truncated, same cut) or to ~3e-6 of the
-//! kernel's peak (recursive, against an uncut Gaussian).
+//! Measured on a 256³ grid (CPU time of both threads, shared 2-core machine): the truncated
+//! kernel costs ∝ σ (≈ 34, 58, 110, 210, 310 ms at σ = 1, 2, 4, 8, 12 voxels), the recursive
+//! one 210–280 ms at any σ; they cross near σ = 10. Both match scipy's `gaussian_filter`
+//! (mode "reflect") to f32 rounding (truncated, same cut) or to ~3e-6 of the kernel's peak
+//! (recursive, against an uncut Gaussian); wall-clock ratios to scipy are in benches/motion.rs.
 
 use crate::grid::{Grid3, SubBox};
 use crate::{Error, Result};
@@ -92,8 +92,8 @@ pub fn diffusion_sigma(time: f64) -> f64 {
 
 /// Heat equation u_t = Δu for `time` (world units, length²), i.e. Gaussian blur of σ = √(2·time)
 /// world units. Neumann (mirror) boundary: the domain does not shrink; exact on constant fields
-/// (weights sum to 1). Errors when `time` is not positive and finite, or the kernel's radius is
-/// not.
+/// (weights sum to 1). Errors when `time` is not positive and finite, or a truncated kernel's
+/// radius is not (or exceeds [`MAX_RADIUS`] nodes).
 pub fn diffuse(grid: &mut Grid3, time: f64, opts: &DiffusionOptions) -> Result<()> {
     let plan = Plan::new(time, grid.voxel(), opts)?;
     let dims = grid.dims();
