@@ -48,25 +48,6 @@ fn inside_fraction(phi_vox: f64) -> (f64, f64) {
     }
 }
 
-/// Sums `f(value)` over the nodes of `region` (which must fit the grid), in parallel by z-layer.
-fn sum_over(phi: &Grid3, region: &SubBox, f: impl Fn(f32) -> f64 + Sync) -> f64 {
-    let dims = phi.dims();
-    let data = phi.data();
-    (region.min[2]..region.max[2])
-        .into_par_iter()
-        .map(|k| {
-            let layer = SubBox::new(
-                [region.min[0], region.min[1], k],
-                [region.max[0], region.max[1], k + 1],
-            );
-            layer
-                .rows(dims)
-                .map(|(_, _, row)| data[row].iter().map(|&v| f(v)).sum::<f64>())
-                .sum::<f64>()
-        })
-        .sum()
-}
-
 fn check_region(phi: &Grid3, region: &SubBox) -> Result<()> {
     if region.fits(phi.dims()) {
         Ok(())
@@ -88,10 +69,7 @@ pub fn measure_volume(phi: &Grid3) -> f64 {
 
 /// [`measure_volume`] over the nodes of `region` only. Errors when the region does not fit.
 pub fn measure_volume_in(phi: &Grid3, region: &SubBox) -> Result<f64> {
-    check_region(phi, region)?;
-    let h = phi.voxel();
-    let inv_h = 1.0 / h;
-    Ok(sum_over(phi, region, |v| inside_fraction(v as f64 * inv_h).0) * h * h * h)
+    measure_shape_in(phi, region).map(|(volume, _)| volume)
 }
 
 /// Area estimate of the zero level set (world units²) over the whole grid; see the module
@@ -102,20 +80,38 @@ pub fn measure_area(phi: &Grid3) -> f64 {
 
 /// [`measure_area`] over the nodes of `region` only. Errors when the region does not fit.
 pub fn measure_area_in(phi: &Grid3, region: &SubBox) -> Result<f64> {
+    measure_shape_in(phi, region).map(|(_, area)| area)
+}
+
+/// [`measure_volume_in`] and [`measure_area_in`] in one pass: (volume, area).
+pub fn measure_shape_in(phi: &Grid3, region: &SubBox) -> Result<(f64, f64)> {
     check_region(phi, region)?;
     let h = phi.voxel();
-    let eps = DELTA_WIDTH_VOXELS;
     let inv_h = 1.0 / h;
-    let sum = sum_over(phi, region, |v| {
-        let x = v as f64 * inv_h;
-        if x.abs() < eps {
-            (1.0 + (std::f64::consts::PI * x / eps).cos()) / (2.0 * eps)
-        } else {
-            0.0
-        }
-    });
-    // Σ δ(φ/h)/h · h³ with δ in per-voxel units.
-    Ok(sum * h * h)
+    let eps = DELTA_WIDTH_VOXELS;
+    let dims = phi.dims();
+    let data = phi.data();
+    let (volume, area) = (region.min[2]..region.max[2])
+        .into_par_iter()
+        .map(|k| {
+            let layer = SubBox::new(
+                [region.min[0], region.min[1], k],
+                [region.max[0], region.max[1], k + 1],
+            );
+            let mut acc = (0.0f64, 0.0f64);
+            for (_, _, row) in layer.rows(dims) {
+                for &v in &data[row] {
+                    let x = v as f64 * inv_h;
+                    acc.0 += inside_fraction(x).0;
+                    if x.abs() < eps {
+                        acc.1 += (1.0 + (std::f64::consts::PI * x / eps).cos()) / (2.0 * eps);
+                    }
+                }
+            }
+            acc
+        })
+        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+    Ok((volume * h * h * h, area * h * h))
 }
 
 /// The nodes near the interface, for evaluating the volume of {φ < λ} at many λ.
