@@ -6,7 +6,8 @@
 //!    on the same 256³ field — the signed distance of a sphere of radius 80h — for σ = 1h, 2h,
 //!    4h (the MBO steps Δt = 0.5h² to 8h²), plus 8h and 16h to show the cost of each kernel as
 //!    σ grows. The max |ours − scipy| is printed beside each timing.
-//! 2. One full MBO step against the oracle's `mbo_step`: pending (see [`mbo_step`]).
+//! 2. One full MBO step (`Flow::step`: diffusion, threshold, redistance) against the oracle's
+//!    `mbo_step` (the same step in numpy/scipy), mcf and vpmcf at Δt = 2h² (see [`mbo_step`]).
 //!
 //! Run: `cargo bench --bench motion` (the reference side needs reference/.venv, which
 //! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON).
@@ -20,6 +21,7 @@ use std::path::Path;
 use std::time::Duration;
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::motion::diffusion::{diffuse, DiffusionKernel, DiffusionOptions};
+use vesselmsr::motion::{Flow, FlowOptions, Velocity};
 
 const N: usize = 256;
 /// Voxel size, world units (not 1, so σ in voxels and in world units differ).
@@ -121,12 +123,121 @@ fn diffusion(reference: Option<&Reference>, dir: &Path, field: &Grid3) {
     }
 }
 
-/// One full MBO step (diffuse + threshold + redistance) against `oracle.py mbo_step`.
-// TODO(issue 4, flows): time one `Flow::step()` for mcf and vpmcf on `field` with Δt = 2h²
-// against `reference.run(["mbo_step", field.npy, dt, out.npy, "--velocity", v])` ("seconds"),
-// printing ours / reference / ratio like `diffusion`.
-fn mbo_step(_reference: Option<&Reference>, _dir: &Path, _field: &Grid3) {
-    println!("\nmbo step: pending");
+/// Mean distance from `c` of the zero crossings of `g` on grid edges (linear interpolation).
+fn crossing_radius(g: &Grid3, c: &Point3<f64>) -> f64 {
+    use rayon::prelude::*;
+    let [nx, ny, nz] = g.dims();
+    let (sum, count) = (0..nz)
+        .into_par_iter()
+        .map(|k| {
+            let (mut sum, mut count) = (0.0, 0usize);
+            for j in 0..ny {
+                for i in 0..nx {
+                    let a = g.get(i, j, k) as f64;
+                    for (axis, q) in [(0, [i + 1, j, k]), (1, [i, j + 1, k]), (2, [i, j, k + 1])] {
+                        if q[0] >= nx || q[1] >= ny || q[2] >= nz {
+                            continue;
+                        }
+                        let b = g.get(q[0], q[1], q[2]) as f64;
+                        if a.is_finite() && b.is_finite() && (a < 0.0) != (b < 0.0) {
+                            let mut p = g.world(i, j, k);
+                            p[axis] += a / (a - b) * g.voxel();
+                            sum += (p - c).norm();
+                            count += 1;
+                        }
+                    }
+                }
+            }
+            (sum, count)
+        })
+        .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    sum / count as f64
+}
+
+/// One full MBO step (diffuse + threshold + redistance) against `oracle.py mbo_step` (scipy
+/// gaussian_filter, threshold, distance_transform_edt of the inside and the outside): mcf and
+/// vpmcf at Δt = 2h² on the sphere field. Ours as `Flow::step` runs it (second-order
+/// correction, redistance within the band 4σ + 3h), and also first order and redistanced over
+/// the whole grid, the same work as the reference's. Beside each, the sphere's radius after the
+/// step against the exact √(R² − 4Δt) (mcf) or R (vpmcf).
+fn mbo_step(reference: Option<&Reference>, dir: &Path, field: &Grid3) {
+    let dt = 2.0 * H * H;
+    println!("\none MBO step, Δt = 2h², {N}³ sphere SDF (r = 80h), vs oracle mbo_step (scipy gaussian_filter + threshold + distance_transform_edt)");
+    let input = dir.join("mbo_in.npy");
+    let reference = reference.filter(|_| vesselmsr::io::write_npy(&input, field).is_ok());
+    let centre = field
+        .transform()
+        .index_to_world(nalgebra::Vector3::new(127.3, 128.6, 127.8));
+    let r0 = 80.0 * H;
+    for (name, velocity, exact) in [
+        ("mcf", Velocity::MeanCurvature, (r0 * r0 - 4.0 * dt).sqrt()),
+        ("vpmcf", Velocity::VolumePreserving, r0),
+    ] {
+        let theirs = reference.and_then(|r| {
+            let out = dir.join("mbo_out.npy");
+            let dt_arg = OsString::from(dt.to_string());
+            let args = [
+                "mbo_step".as_ref(),
+                input.as_os_str(),
+                &dt_arg,
+                out.as_os_str(),
+                "--velocity".as_ref(),
+                name.as_ref(),
+            ];
+            let best = seconds(&reference_best(r, &args)?)?;
+            let g = vesselmsr::io::read_npy(&out).ok()?;
+            Some((best, crossing_radius(&g, &centre)))
+        });
+        let variants = [
+            ("Flow::step (default)", FlowOptions::default()),
+            (
+                "first order",
+                FlowOptions {
+                    second_order: false,
+                    ..FlowOptions::default()
+                },
+            ),
+            (
+                "first order, whole grid",
+                FlowOptions {
+                    second_order: false,
+                    band_voxels: Some(N as f64 * 2.0),
+                    ..FlowOptions::default()
+                },
+            ),
+        ];
+        println!("{name}: exact radius after the step {:.4}h", exact / H);
+        for (variant, opts) in variants {
+            let (t, g) = time_median_with_setup(
+                3,
+                3,
+                Duration::ZERO,
+                || field.clone(),
+                |mut g| {
+                    let mut flow = Flow::new(velocity, dt, opts.clone()).expect("a flow");
+                    flow.step(&mut g).expect("the step runs");
+                    g
+                },
+            );
+            let s = t.as_secs_f64();
+            let radius_err = (crossing_radius(&g, &centre) - exact) / H;
+            match theirs {
+                Some((r, their_radius)) => println!(
+                    "  {variant:<24} {:>8.1} ms   reference {:>8.1} ms   ratio {:>5.2}×   radius error ours {radius_err:+.4}h, reference {:+.4}h",
+                    s * 1e3,
+                    r * 1e3,
+                    r / s,
+                    (their_radius - exact) / H
+                ),
+                None => println!("  {variant:<24} {:>8.1} ms   radius error {radius_err:+.4}h", s * 1e3),
+            }
+        }
+    }
+}
+
+/// The reference's best of two runs (each takes seconds at 256³).
+fn reference_best(reference: &Reference, args: &[&std::ffi::OsStr]) -> Option<serde_json::Value> {
+    reference.best_of(2, args)
 }
 
 fn main() {

@@ -25,8 +25,8 @@ use std::time::Instant;
 /// Default time step, in voxels² (h²).
 pub const DEFAULT_DT_VOXELS2: f64 = 2.0;
 
-/// f32 grids held during a step: φ, the copy for the second-order correction, and the
-/// diffusion's and the redistancer's work arrays.
+/// f32-sized arrays per node held during a step, for the memory estimate: φ, its copy for the
+/// second-order correction, and the redistancer's two work arrays (over the band's box).
 const GRIDS_HELD: usize = 4;
 
 /// The velocities on the command line.

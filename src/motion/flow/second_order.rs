@@ -83,12 +83,16 @@ pub(super) fn correct(u: &mut Grid3, phi: &Grid3, dt: f64) {
     }
 }
 
-/// Value of `v` at node `at` + `o` (clamped to the grid: at its border the missing neighbour is
-/// the node itself, the diffusion's mirror boundary).
+/// Value of `v` at node `at` + `o`, |o| ≤ 1 per axis (clamped to the grid: at its border the
+/// missing neighbour is the node itself, the diffusion's mirror boundary).
 #[inline]
 fn value(v: &[f32], at: [usize; 3], o: [isize; 3], dims: [usize; 3]) -> f64 {
-    let q: [usize; 3] =
-        std::array::from_fn(|a| (at[a] as isize + o[a]).clamp(0, dims[a] as isize - 1) as usize);
+    let interior = (0..3).all(|a| at[a] >= 1 && at[a] + 1 < dims[a]);
+    let q: [usize; 3] = if interior {
+        std::array::from_fn(|a| (at[a] as isize + o[a]) as usize)
+    } else {
+        std::array::from_fn(|a| (at[a] as isize + o[a]).clamp(0, dims[a] as isize - 1) as usize)
+    };
     v[q[0] + dims[0] * (q[1] + dims[1] * q[2])] as f64
 }
 
