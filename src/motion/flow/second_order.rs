@@ -57,7 +57,7 @@ pub(super) fn correct(u: &mut Grid3, phi: &Grid3, dt: f64) {
                     let at = [i, j, k];
                     let phi_grad = gradient(pp, at, dims, h);
                     let g2 = phi_grad.iter().map(|g| g * g).sum::<f64>();
-                    if !(g2 > 0.25) {
+                    if g2.is_nan() || g2 <= 0.25 {
                         // Near a kink of φ (medial axis): no reliable closest point.
                         continue;
                     }
