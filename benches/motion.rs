@@ -159,7 +159,7 @@ fn crossing_radius(g: &Grid3, c: &Point3<f64>) -> f64 {
 /// One full MBO step (diffuse + threshold + redistance) against `oracle.py mbo_step` (scipy
 /// gaussian_filter, threshold, distance_transform_edt of the inside and the outside): mcf and
 /// vpmcf at Δt = 2h² on the sphere field. Ours as `Flow::step` runs it (second-order
-/// correction, redistance within the band 4σ + 3h), and also first order and redistanced over
+/// correction, redistance within the band 3σ + 3h), and also first order and redistanced over
 /// the whole grid, the same work as the reference's. Beside each, the sphere's radius after the
 /// step against the exact √(R² − 4Δt) (mcf) or R (vpmcf).
 fn mbo_step(reference: Option<&Reference>, dir: &Path, field: &Grid3) {
