@@ -31,8 +31,8 @@ use crate::grid::Grid3;
 use rayon::prelude::*;
 
 /// Half-width, in voxels, of the band of nodes corrected (the redistancer's interface patches
-/// read φ up to two nodes away from a sign change; the margin covers the correction itself).
-const CORRECTED_BAND_VOXELS: f32 = 4.0;
+/// read φ up to about two voxels away from the surface).
+const CORRECTED_BAND_VOXELS: f32 = 3.0;
 
 /// Overwrites `u` (φ diffused for `dt`) near the zero level set with the corrected
 /// ψ = φ + ½(δ(x) + δ(π(x))) − (Δt²/2)·κ(κ₁ − κ₂)², δ = u − φ, `phi` holding φ on the same grid
