@@ -468,3 +468,106 @@ def test_real_meshes_match_sources(name):
         # Two libraries agree on the enclosed volume; the capped aorta faces inward.
         assert res["manifold_volume"] == pytest.approx(inf["volume"], rel=1e-9)
         assert (inf["volume"] < 0) is name.startswith("aorta")
+
+
+# --------------------------------------------------------------------------------------------
+# Diffusion and threshold dynamics (grids as vesselmsr .npy + sidecar)
+# --------------------------------------------------------------------------------------------
+
+
+def _sidecar(dims, voxel, origin=(0.0, 0.0, 0.0)):
+    return {"dims": list(dims), "origin": list(origin), "voxel": voxel, "axis_order": "z,y,x",
+            "units": "file units", "sign": "negative inside"}  # fmt: skip
+
+
+def _reflect_filter(a: np.ndarray, sigma: float, truncate: float = 4.0) -> np.ndarray:
+    """Independent of scipy: mirror-pad (… c b a | a b c …) and convolve each axis with the
+    normalised sampled Gaussian, in float64."""
+    r = int(truncate * sigma + 0.5)
+    w = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
+    w /= w.sum()
+    out = a.astype(np.float64)
+    for axis in range(3):
+        n = out.shape[axis]
+        idx = np.arange(-r, n + r) % (2 * n)
+        idx = np.where(idx < n, idx, 2 * n - 1 - idx)
+        padded = np.take(out, idx, axis=axis)
+        out = np.apply_along_axis(lambda v: np.convolve(v, w, mode="valid"), axis, padded)
+    return out
+
+
+def test_gaussian_matches_mirror_convolution_and_moments():
+    rng = np.random.default_rng(5)
+    a = rng.standard_normal((9, 12, 15)).astype(np.float32)
+    h, t = 0.5, 0.5  # σ = √(2t)/h = 2 voxels: the kernel (r = 8) folds over the 9-node axis
+    res = oracle.gaussian(a, h, t)
+    assert res["sigma_voxels"] == pytest.approx(2.0)
+    assert res["values"].dtype == np.float32
+    np.testing.assert_allclose(res["values"], _reflect_filter(a, 2.0), atol=2e-6)
+    # Constant fields stay constant; a delta spreads to variance σ² per axis (mass kept).
+    c = oracle.gaussian(np.full((7, 8, 9), 2.5, np.float32), 1.0, 3.0)["values"]
+    np.testing.assert_allclose(c, 2.5, rtol=1e-6)
+    d = np.zeros((41, 41, 41), np.float32)
+    d[20, 20, 20] = 1
+    g = oracle.gaussian(d, 1.0, 4.5)["values"].astype(np.float64)  # σ = 3
+    x = np.arange(41) - 20
+    assert g.sum() == pytest.approx(1.0, rel=1e-5)
+    for axis in range(3):
+        m = g.sum(axis=tuple(b for b in range(3) if b != axis))
+        assert (m * x**2).sum() == pytest.approx(9.0, rel=2e-3)
+    with pytest.raises(oracle.OracleError):
+        oracle.gaussian(a, h, 0.0)
+
+
+def _sphere_sdf(n: int, h: float, r: float) -> np.ndarray:
+    c = (n - 1) / 2
+    k, j, i = np.meshgrid(*(np.arange(n),) * 3, indexing="ij")
+    return ((np.sqrt((i - c) ** 2 + (j - c) ** 2 + (k - c) ** 2) * h) - r).astype(np.float32)
+
+
+def test_mbo_step_sphere():
+    """One step on a sphere of radius R: mcf shrinks it to about √(R² − 4dt) (the grid's binary
+    threshold quantises to a voxel), vpmcf keeps its node count; φ_new is a signed distance."""
+    n, h, R, dt = 48, 0.5, 8.0, 2.0
+    phi = _sphere_sdf(n, h, R)
+    res = oracle.mbo_step(phi.astype(np.float64), h, dt, "mcf")
+    new = res["values"]
+    vol = res["inside_after"] * h**3
+    r_new = (3 * vol / (4 * math.pi)) ** (1 / 3)
+    assert r_new == pytest.approx(math.sqrt(R * R - 4 * dt), abs=h)
+    assert r_new < R - 0.5 * h
+    assert res["shift"] == 0.0 and np.count_nonzero(new < 0) == res["inside_after"]
+    # Distances: the centre is about r_new deep, a corner about its distance to the sphere.
+    assert -new[24, 24, 24] == pytest.approx(r_new, abs=h)
+    assert new[0, 0, 0] == pytest.approx(math.sqrt(3) * 23.5 * h - r_new, abs=h)
+    vp = oracle.mbo_step(phi.astype(np.float64), h, dt, "vpmcf")
+    assert vp["inside_after"] == vp["inside_before"] == np.count_nonzero(phi < 0)
+    assert vp["shift"] > 0  # the smoothed field of a convex shape must be lowered less
+    with pytest.raises(oracle.OracleError):
+        oracle.mbo_step(phi, h, -1.0)
+    with pytest.raises(oracle.OracleError):
+        oracle.mbo_step(phi, h, 1.0, "expand")
+
+
+def test_gaussian_and_mbo_cli(tmp_path):
+    rng = np.random.default_rng(6)
+    a = rng.standard_normal((6, 7, 8)).astype(np.float32)
+    side = _sidecar((8, 7, 6), 0.25, (1.0, -2.0, 0.5))
+    grid = tmp_path / "g.npy"
+    oracle.write_npy_grid(grid, a, side)
+    out = run_cli("gaussian", grid, 0.0625, tmp_path / "o.npy", "--truncate", 3)
+    assert out["sigma_voxels"] == pytest.approx(1.414213562373095)
+    o, o_side = oracle.read_npy_grid(tmp_path / "o.npy")
+    assert o_side == side
+    np.testing.assert_array_equal(o, oracle.gaussian(a, 0.25, 0.0625, truncate=3)["values"])
+    phi = _sphere_sdf(20, 0.5, 3.0)
+    oracle.write_npy_grid(tmp_path / "s.npy", phi, _sidecar((20, 20, 20), 0.5))
+    out = run_cli("mbo_step", tmp_path / "s.npy", 0.5, tmp_path / "m.npy", "--velocity", "vpmcf")
+    m, _ = oracle.read_npy_grid(tmp_path / "m.npy")
+    assert out["inside_after"] == out["inside_before"] == np.count_nonzero(m < 0)
+    # Errors: bad time, missing sidecar, sidecar disagreeing with the array.
+    run_cli("gaussian", grid, 0, tmp_path / "x.npy", ok=False)
+    np.save(tmp_path / "bare.npy", a)
+    run_cli("gaussian", tmp_path / "bare.npy", 1, tmp_path / "x.npy", ok=False)
+    oracle.write_npy_grid(tmp_path / "bad.npy", a, _sidecar((8, 7, 5), 0.25))
+    run_cli("mbo_step", tmp_path / "bad.npy", 1, tmp_path / "x.npy", ok=False)

@@ -15,6 +15,7 @@ pub mod levelset;
 pub mod mesh;
 pub mod msr;
 pub mod report;
+pub mod motion;
 
 pub use error::{Error, Result};
 pub use mesh::TriMesh;

@@ -1,0 +1,610 @@
+//! Heat diffusion on a grid: u_t = Δu for a time t (world units, length²) is the convolution with
+//! the Gaussian of σ = √(2t) (the diffusion step of threshold dynamics, paper Section 3,
+//! Algorithms 2 and 3; Merriman, Bence, Osher 1992).
+//!
+//! The Gaussian is separable: one 1-D filter along x, y and z in turn, each run in parallel
+//! (rayon) over bundles of lines laid side by side in memory (x-contiguous rows for the y and z
+//! passes), so the inner loops run over contiguous memory and vectorise.
+//!
+//! **Boundary.** Neumann, by mirror extension about the half-voxel faces around the boundary
+//! nodes (… c b a | a b c …, scipy.ndimage's `mode="reflect"`): the domain does not shrink, the
+//! filter is exact on constant fields (its weights sum to 1) and, being symmetric and doubly
+//! stochastic, it conserves Σu exactly — the discrete volume a volume-preserving flow thresholds
+//! against. A linear field is preserved at nodes farther than the kernel's reach from the
+//! boundary; near it the mirror bends it (the reflected field is even about the face).
+//!
+//! **Kernels.**
+//! * [`DiffusionKernel::Truncated`]: the sampled Gaussian e^(−x²/2σ²), cut at r = ⌊ρσ + ½⌋
+//!   nodes (ρ = `radius_sigmas`, the rule of scipy's `gaussian_filter` with `truncate = ρ`) and
+//!   normalised; cost ∝ r per node and pass, accumulated in f32.
+//! * [`DiffusionKernel::Recursive`]: a sixth-order recursive Gaussian in the form of Deriche
+//!   (1993, "Recursively implementing the Gaussian and its derivatives", INRIA RR-1893): the
+//!   causal half of the kernel is a sum of three damped cosines, e^(−x²/2σ²) ≈
+//!   Σ (a·cos(ωx/σ) + c·sin(ωx/σ))·e^(−bx/σ), each a complex first-order recursion run forward and
+//!   backward over the line; cost independent of σ. The three terms are our own fit (max error
+//!   1.95e-6 of the peak, against 5e-4 for Deriche's two terms), and the kernel is normalised
+//!   exactly. The mirror boundary is exact: the mirrored line is periodic of period 2n, and the
+//!   state each recursion would have on it follows in closed form from the states reached from
+//!   rest (see `RecursiveAxis`). Accumulated in f64: within ~3e-6 of the peak of the sampled
+//!   Gaussian at every σ ≥ 1 voxel.
+//! * [`DiffusionKernel::Auto`] (default): truncated up to σ = [`AUTO_RECURSIVE_FROM_SIGMA`]
+//!   voxels, recursive beyond, from measured cost and accuracy (see the constant).
+
+use crate::grid::{Grid3, SubBox};
+use crate::{Error, Result};
+use rayon::prelude::*;
+
+/// Default truncation radius of [`DiffusionKernel::Truncated`], in σ (scipy's default too).
+pub const DEFAULT_RADIUS_SIGMAS: f64 = 4.0;
+
+/// [`DiffusionKernel::Auto`] uses the truncated kernel (ρ = 4) below this σ, in voxels, and the
+/// recursive filter from it on.
+pub const AUTO_RECURSIVE_FROM_SIGMA: f64 = 6.0;
+
+/// Below this σ (voxels) the recursive filter is not used (its approximation of the Gaussian
+/// degrades): [`DiffusionKernel::Recursive`] falls back to the truncated kernel (ρ = 4).
+pub const RECURSIVE_MIN_SIGMA: f64 = 1.0;
+
+/// Lines filtered together by the recursive x pass.
+const X_BUNDLE: usize = 8;
+/// Lines (x-contiguous nodes) filtered together by the recursive y and z passes.
+const LANE_BLOCK: usize = 64;
+/// Nodes of a slab processed together by the truncated z pass.
+const Z_TILE: usize = 1024;
+
+/// How the Gaussian is applied.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum DiffusionKernel {
+    /// Truncated kernel for small σ, recursive filter for large σ (see
+    /// [`AUTO_RECURSIVE_FROM_SIGMA`]).
+    #[default]
+    Auto,
+    /// Sampled Gaussian cut at ⌊radius_sigmas·σ + ½⌋ nodes on each side (in σ, so
+    /// independent of the voxel size), normalised to sum 1. Cost grows with σ.
+    Truncated {
+        /// Half-width of the kernel in standard deviations (4 matches scipy's default).
+        radius_sigmas: f64,
+    },
+    /// Sixth-order recursive (Deriche-form) Gaussian: cost independent of σ, within ~3e-6 of the
+    /// peak of the sampled Gaussian.
+    /// Falls back to the truncated kernel below σ = [`RECURSIVE_MIN_SIGMA`] voxels.
+    Recursive,
+}
+
+/// Options of [`diffuse`] and [`diffuse_in_box`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DiffusionOptions {
+    /// The kernel (default: [`DiffusionKernel::Auto`]).
+    pub kernel: DiffusionKernel,
+}
+
+/// σ of the Gaussian that solves the heat equation for `time` (world units: σ = √(2·time)).
+pub fn diffusion_sigma(time: f64) -> f64 {
+    (2.0 * time).sqrt()
+}
+
+/// Heat equation u_t = Δu for `time` (world units, length²), i.e. Gaussian blur of σ = √(2·time)
+/// world units. Neumann (mirror) boundary: the domain does not shrink; exact on constant fields
+/// (weights sum to 1). Errors when `time` is not positive and finite, or the kernel's radius is
+/// not.
+pub fn diffuse(grid: &mut Grid3, time: f64, opts: &DiffusionOptions) -> Result<()> {
+    let plan = Plan::new(time, grid.voxel(), opts)?;
+    let dims = grid.dims();
+    match plan {
+        Plan::Identity => {}
+        Plan::Truncated(w) => {
+            xy_truncated(grid.data_mut(), dims, &w);
+            if dims[2] > 1 {
+                let out = z_truncated(grid.data(), dims, &w);
+                *grid = Grid3::from_data(dims, *grid.transform(), out)?;
+            }
+        }
+        Plan::Recursive(rec) => {
+            xy_recursive(grid.data_mut(), dims, &rec);
+            if dims[2] > 1 {
+                z_recursive(grid.data_mut(), dims, &rec);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Same as [`diffuse`], restricted to a sub-box of the grid (mirror boundary at the sub-box
+/// faces); nodes outside are untouched. Errors as [`diffuse`], and when the box is empty or does
+/// not fit in the grid.
+pub fn diffuse_in_box(
+    grid: &mut Grid3,
+    sub_box: &SubBox,
+    time: f64,
+    opts: &DiffusionOptions,
+) -> Result<()> {
+    // Check the arguments before copying anything.
+    Plan::new(time, grid.voxel(), opts)?;
+    let mut sub = grid.extract(sub_box)?;
+    diffuse(&mut sub, time, opts)?;
+    grid.write_back(sub_box, &sub)
+}
+
+/// What [`diffuse`] does for one call.
+enum Plan {
+    /// σ so small that the truncated kernel is the single weight 1.
+    Identity,
+    /// Half of a symmetric kernel: w[0] at the centre, w[t] at ±t.
+    Truncated(Vec<f32>),
+    Recursive(Recursive),
+}
+
+impl Plan {
+    fn new(time: f64, voxel: f64, opts: &DiffusionOptions) -> Result<Plan> {
+        if !(time.is_finite() && time > 0.0) {
+            return Err(Error::Geometry(format!(
+                "diffusion time must be positive and finite (world units, length²), got {time}"
+            )));
+        }
+        let sigma = diffusion_sigma(time) / voxel;
+        if !sigma.is_finite() {
+            return Err(Error::Geometry(format!(
+                "diffusion time {time} on voxels of {voxel} gives σ = {sigma} voxels"
+            )));
+        }
+        let truncated = |radius_sigmas: f64| -> Result<Plan> {
+            if !(radius_sigmas.is_finite() && radius_sigmas > 0.0) {
+                return Err(Error::Geometry(format!(
+                    "kernel radius must be positive and finite (in σ), got {radius_sigmas}"
+                )));
+            }
+            let w = truncated_weights(sigma, radius_sigmas);
+            Ok(if w.len() == 1 {
+                Plan::Identity
+            } else {
+                Plan::Truncated(w)
+            })
+        };
+        match opts.kernel {
+            DiffusionKernel::Truncated { radius_sigmas } => truncated(radius_sigmas),
+            DiffusionKernel::Auto if sigma < AUTO_RECURSIVE_FROM_SIGMA => {
+                truncated(DEFAULT_RADIUS_SIGMAS)
+            }
+            DiffusionKernel::Recursive if sigma < RECURSIVE_MIN_SIGMA => {
+                truncated(DEFAULT_RADIUS_SIGMAS)
+            }
+            DiffusionKernel::Auto | DiffusionKernel::Recursive => {
+                Ok(Plan::Recursive(Recursive::new(sigma)))
+            }
+        }
+    }
+}
+
+/// Reflects index `i` into 0..n about the half-voxel faces (period 2n).
+#[inline]
+fn reflect(i: isize, n: usize) -> usize {
+    let m = i.rem_euclid(2 * n as isize) as usize;
+    if m < n {
+        m
+    } else {
+        2 * n - 1 - m
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Truncated kernel
+// ------------------------------------------------------------------------------------------
+
+/// w[0..=r] of the normalised sampled Gaussian of `sigma` voxels cut at r = ⌊ρσ + ½⌋.
+fn truncated_weights(sigma: f64, radius_sigmas: f64) -> Vec<f32> {
+    // Bounded so a huge σ cannot ask for an absurd allocation; far beyond any grid anyway.
+    let r = (radius_sigmas * sigma + 0.5).floor().min(1e7) as usize;
+    let w: Vec<f64> = (0..=r)
+        .map(|t| (-0.5 * (t as f64 / sigma).powi(2)).exp())
+        .collect();
+    let sum = w[0] + 2.0 * w[1..].iter().sum::<f64>();
+    w.iter().map(|&v| (v / sum) as f32).collect()
+}
+
+/// out = w0·centre.
+#[inline]
+fn scale_into(out: &mut [f32], w0: f32, centre: &[f32]) {
+    for (o, &c) in out.iter_mut().zip(centre) {
+        *o = w0 * c;
+    }
+}
+
+/// out += w·(a + b).
+#[inline]
+fn add_pair(out: &mut [f32], w: f32, a: &[f32], b: &[f32]) {
+    for ((o, &x), &y) in out.iter_mut().zip(a).zip(b) {
+        *o += w * (x + y);
+    }
+}
+
+/// The x and y passes of the truncated kernel, in place, slab (fixed z) by slab in parallel.
+fn xy_truncated(data: &mut [f32], dims: [usize; 3], w: &[f32]) {
+    let [nx, ny, _] = dims;
+    let r = w.len() - 1;
+    data.par_chunks_mut(nx * ny).for_each_init(
+        || (Vec::new(), Vec::new()),
+        |(scratch, padded): &mut (Vec<f32>, Vec<f32>), slab| {
+            if ny > 1 {
+                scratch.clear();
+                scratch.extend_from_slice(slab);
+                let row = |j: isize| &scratch[reflect(j, ny) * nx..][..nx];
+                for (j, out) in slab.chunks_exact_mut(nx).enumerate() {
+                    let j = j as isize;
+                    scale_into(out, w[0], row(j));
+                    for (t, &wt) in w.iter().enumerate().skip(1) {
+                        add_pair(out, wt, row(j - t as isize), row(j + t as isize));
+                    }
+                }
+            }
+            if nx > 1 {
+                for out in slab.chunks_exact_mut(nx) {
+                    padded.clear();
+                    padded
+                        .extend((0..nx + 2 * r).map(|p| out[reflect(p as isize - r as isize, nx)]));
+                    scale_into(out, w[0], &padded[r..r + nx]);
+                    for (t, &wt) in w.iter().enumerate().skip(1) {
+                        add_pair(
+                            out,
+                            wt,
+                            &padded[r - t..r - t + nx],
+                            &padded[r + t..r + t + nx],
+                        );
+                    }
+                }
+            }
+        },
+    );
+}
+
+/// The z pass of the truncated kernel, out of place. Each task owns a run of output slabs and
+/// walks them tile by tile, so the input tiles it reads stay in cache across its slabs.
+fn z_truncated(src: &[f32], dims: [usize; 3], w: &[f32]) -> Vec<f32> {
+    let [nx, ny, nz] = dims;
+    let slab = nx * ny;
+    let mut out = vec![0.0f32; src.len()];
+    let per_task = (nz / (4 * rayon::current_num_threads())).clamp(1, 32);
+    out.par_chunks_mut(slab * per_task)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let k0 = c * per_task;
+            for t0 in (0..slab).step_by(Z_TILE) {
+                let t1 = (t0 + Z_TILE).min(slab);
+                let tile = |k: isize| &src[reflect(k, nz) * slab..][t0..t1];
+                for (kk, out_slab) in chunk.chunks_exact_mut(slab).enumerate() {
+                    let k = (k0 + kk) as isize;
+                    let out = &mut out_slab[t0..t1];
+                    scale_into(out, w[0], tile(k));
+                    for (t, &wt) in w.iter().enumerate().skip(1) {
+                        add_pair(out, wt, tile(k - t as isize), tile(k + t as isize));
+                    }
+                }
+            }
+        });
+    out
+}
+
+// Recursive filter: three complex first-order sections, forward and backward
+// ------------------------------------------------------------------------------------------
+
+/// One term (a·cos ωx + c·sin ωx)·e^(−bx) of the fit of e^(−x²/2) on x ≥ 0 (x in σ).
+struct Term {
+    a: f64,
+    c: f64,
+    b: f64,
+    omega: f64,
+}
+
+/// Least-squares fit (Lawson-reweighted towards the minimax error) of e^(−x²/2) on x ≥ 0 by three
+/// damped cosines, done for this crate with scipy.optimize.least_squares on 4001 points of
+/// [0, 12]: |fit − e^(−x²/2)| ≤ 1.95e-6 on [0, ∞). (Deriche's classic two-term fit, 1993, is
+/// good to 5e-4.)
+const TERMS: [Term; 3] = [
+    Term {
+        a: 3.0807927229623284,
+        c: 6.772412894260283,
+        b: 2.1529136209935644,
+        omega: 0.5240060230080384,
+    },
+    Term {
+        a: -2.224545873015181,
+        c: -0.7240181698435902,
+        b: 2.118595182127043,
+        omega: 1.609166144003588,
+    },
+    Term {
+        a: 0.14375121234288138,
+        c: -0.0598559316925324,
+        b: 2.0402375727803532,
+        omega: 2.847960897525045,
+    },
+];
+
+/// The correction of a section's start state is dropped once |λ|^m falls below this.
+const TAIL: f64 = 1e-12;
+
+/// A complex number (re, im) — the few operations the sections need.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct C(f64, f64);
+
+impl C {
+    fn mul(self, o: C) -> C {
+        C(self.0 * o.0 - self.1 * o.1, self.0 * o.1 + self.1 * o.0)
+    }
+    fn add(self, o: C) -> C {
+        C(self.0 + o.0, self.1 + o.1)
+    }
+    fn sub(self, o: C) -> C {
+        C(self.0 - o.0, self.1 - o.1)
+    }
+    fn scale(self, s: f64) -> C {
+        C(self.0 * s, self.1 * s)
+    }
+    fn inv(self) -> C {
+        let d = self.0 * self.0 + self.1 * self.1;
+        C(self.0 / d, -self.1 / d)
+    }
+    fn norm(self) -> f64 {
+        self.0.hypot(self.1)
+    }
+}
+
+/// The recursive Gaussian of σ (voxels): the causal half of the kernel,
+/// h[m] = Re Σ α_k·λ_k^m (m ≥ 0), normalised so the whole kernel h[|m|] sums to 1.
+#[derive(Debug, Clone)]
+struct Recursive {
+    alpha: [C; 3],
+    lambda: [C; 3],
+    /// h[0], counted by both the forward and the backward pass.
+    h0: f64,
+}
+
+impl Recursive {
+    fn new(sigma: f64) -> Recursive {
+        let alpha = TERMS.each_ref().map(|t| C(t.a, -t.c));
+        let lambda = TERMS.each_ref().map(|t| {
+            C((-t.omega / sigma).cos(), (t.omega / sigma).sin()).scale((-t.b / sigma).exp())
+        });
+        // Σ_m h[|m|] = 2·Re Σ α/(1 − λ) − h[0].
+        let h0: f64 = alpha.iter().map(|a| a.0).sum();
+        let half: f64 = (0..3)
+            .map(|k| alpha[k].mul(C(1.0, 0.0).sub(lambda[k]).inv()).0)
+            .sum();
+        let total = 2.0 * half - h0;
+        Recursive {
+            alpha: alpha.map(|a| a.scale(1.0 / total)),
+            lambda,
+            h0: h0 / total,
+        }
+    }
+}
+
+/// One section along an axis of `n` nodes: λ^n, 1/(1 − λ^2n) and the powers λ^1..λ^len used by
+/// the start-state corrections.
+#[derive(Debug, Clone)]
+struct AxisSection {
+    alpha: C,
+    lambda: C,
+    lambda_n: C,
+    periodic: C,
+    powers: Vec<C>,
+}
+
+/// The recursive filter along one axis of `n` nodes, for bundles of lines stored position-major
+/// (`buf[q·lanes + l]`: node q of line l).
+///
+/// With the mirrored line periodic of period 2n and the kernel symmetric, the backward pass over
+/// the line is the forward pass over its mirror image, so each section runs once forward and
+/// once backward over the n nodes from rest; their start states on the periodic line then
+/// follow in closed form — s = (G + λⁿF)/(1 − λ²ⁿ) before node 0 and t = F + λⁿs after node
+/// n − 1, F and G the end states from rest — and their free responses λ^(q+1)s and λ^(n−q)t are
+/// added where they have not decayed below [`TAIL`].
+struct RecursiveAxis {
+    sections: Vec<AxisSection>,
+    h0: f64,
+    n: usize,
+}
+
+impl RecursiveAxis {
+    fn new(rec: &Recursive, n: usize) -> RecursiveAxis {
+        let sections = (0..3)
+            .map(|k| {
+                let (alpha, lambda) = (rec.alpha[k], rec.lambda[k]);
+                let lambda_n = c_pow(lambda, n);
+                let periodic = C(1.0, 0.0).sub(lambda_n.mul(lambda_n)).inv();
+                let r = lambda.norm();
+                let len = if r <= 0.0 {
+                    0
+                } else {
+                    ((TAIL.ln() / r.ln()).ceil() as usize).min(n)
+                };
+                let mut powers = Vec::with_capacity(len);
+                let mut p = C(1.0, 0.0);
+                for _ in 0..len {
+                    p = p.mul(lambda);
+                    powers.push(p);
+                }
+                AxisSection {
+                    alpha,
+                    lambda,
+                    lambda_n,
+                    periodic,
+                    powers,
+                }
+            })
+            .collect();
+        RecursiveAxis {
+            sections,
+            h0: rec.h0,
+            n,
+        }
+    }
+
+    /// Filters `lanes` lines: `x` holds them (n·lanes values), `out` receives the result.
+    /// `state` is scratch.
+    fn filter(&self, x: &[f64], lanes: usize, out: &mut [f64], state: &mut Vec<f64>) {
+        let (n, l) = (self.n, lanes);
+        debug_assert!(x.len() == n * l && out.len() == n * l);
+        // Per section: forward end state F (re, im), backward end state G (re, im).
+        state.clear();
+        state.resize(12 * l, 0.0);
+        out.fill(0.0);
+        let (fwd, bwd) = state.split_at_mut(6 * l);
+        for (sec, f) in self.sections.iter().zip(fwd.chunks_exact_mut(2 * l)) {
+            let (yr, yi) = f.split_at_mut(l);
+            for q in 0..n {
+                step(sec, &x[q * l..][..l], yr, yi, &mut out[q * l..][..l]);
+            }
+        }
+        for (sec, g) in self.sections.iter().zip(bwd.chunks_exact_mut(2 * l)) {
+            let (yr, yi) = g.split_at_mut(l);
+            for q in (0..n).rev() {
+                step(sec, &x[q * l..][..l], yr, yi, &mut out[q * l..][..l]);
+            }
+        }
+        for (o, &v) in out.iter_mut().zip(x) {
+            *o -= self.h0 * v;
+        }
+        // Start states on the periodic line, and their free responses.
+        for (k, sec) in self.sections.iter().enumerate() {
+            let m = sec.powers.len();
+            for lane in 0..l {
+                let f = C(fwd[2 * k * l + lane], fwd[(2 * k + 1) * l + lane]);
+                let g = C(bwd[2 * k * l + lane], bwd[(2 * k + 1) * l + lane]);
+                let s = g.add(sec.lambda_n.mul(f)).mul(sec.periodic);
+                let t = f.add(sec.lambda_n.mul(s));
+                for (q, p) in sec.powers.iter().enumerate() {
+                    // λ^(q+1)·s at node q, λ^(q+1)·t at node n − 1 − q.
+                    out[q * l + lane] += p.mul(s).0;
+                    out[(n - 1 - q) * l + lane] += p.mul(t).0;
+                }
+                debug_assert!(m <= n);
+            }
+        }
+    }
+}
+
+/// One step of a section over a row of lanes: y ← α·x + λ·y; out += Re y.
+#[inline]
+fn step(sec: &AxisSection, x: &[f64], yr: &mut [f64], yi: &mut [f64], out: &mut [f64]) {
+    let (C(ar, ai), C(lr, li)) = (sec.alpha, sec.lambda);
+    for (((&x, yr), yi), o) in x.iter().zip(yr).zip(yi).zip(out) {
+        let r = ar * x + lr * *yr - li * *yi;
+        let i = ai * x + lr * *yi + li * *yr;
+        *yr = r;
+        *yi = i;
+        *o += r;
+    }
+}
+
+fn c_pow(mut x: C, mut e: usize) -> C {
+    let mut r = C(1.0, 0.0);
+    while e > 0 {
+        if e & 1 == 1 {
+            r = r.mul(x);
+        }
+        x = x.mul(x);
+        e >>= 1;
+    }
+    r
+}
+
+/// Scratch of one task of the recursive passes: lines in, lines out, section states.
+#[derive(Default)]
+struct Scratch {
+    x: Vec<f64>,
+    out: Vec<f64>,
+    state: Vec<f64>,
+}
+
+impl Scratch {
+    /// Sizes the buffers for `len` values.
+    fn prepare(&mut self, len: usize) {
+        self.x.clear();
+        self.x.resize(len, 0.0);
+        self.out.clear();
+        self.out.resize(len, 0.0);
+    }
+
+    fn run(&mut self, axis: &RecursiveAxis, lanes: usize) {
+        axis.filter(&self.x, lanes, &mut self.out, &mut self.state);
+    }
+}
+
+/// The x and y passes of the recursive filter, in place, slab by slab in parallel. The y pass
+/// takes the slab in column blocks of [`LANE_BLOCK`] nodes, the x pass bundles of
+/// [`X_BUNDLE`] rows (transposed so the lanes are contiguous).
+fn xy_recursive(data: &mut [f32], dims: [usize; 3], rec: &Recursive) {
+    let [nx, ny, _] = dims;
+    let ax = (nx > 1).then(|| RecursiveAxis::new(rec, nx));
+    let ay = (ny > 1).then(|| RecursiveAxis::new(rec, ny));
+    data.par_chunks_mut(nx * ny)
+        .for_each_init(Scratch::default, |sc, slab| {
+            if let Some(ay) = &ay {
+                for i0 in (0..nx).step_by(LANE_BLOCK) {
+                    let lanes = LANE_BLOCK.min(nx - i0);
+                    sc.prepare(ny * lanes);
+                    for (j, row) in sc.x.chunks_exact_mut(lanes).enumerate() {
+                        for (v, &s) in row.iter_mut().zip(&slab[j * nx + i0..][..lanes]) {
+                            *v = f64::from(s);
+                        }
+                    }
+                    sc.run(ay, lanes);
+                    for (j, row) in sc.out.chunks_exact(lanes).enumerate() {
+                        for (s, &v) in slab[j * nx + i0..][..lanes].iter_mut().zip(row) {
+                            *s = v as f32;
+                        }
+                    }
+                }
+            }
+            if let Some(ax) = &ax {
+                for rows in slab.chunks_mut(nx * X_BUNDLE) {
+                    let lanes = rows.len() / nx;
+                    sc.prepare(nx * lanes);
+                    for (lane, row) in rows.chunks_exact(nx).enumerate() {
+                        for (i, &v) in row.iter().enumerate() {
+                            sc.x[i * lanes + lane] = f64::from(v);
+                        }
+                    }
+                    sc.run(ax, lanes);
+                    for (lane, row) in rows.chunks_exact_mut(nx).enumerate() {
+                        for (i, v) in row.iter_mut().enumerate() {
+                            *v = sc.out[i * lanes + lane] as f32;
+                        }
+                    }
+                }
+            }
+        });
+}
+
+/// The z pass of the recursive filter, in place: each task filters a block of [`LANE_BLOCK`]
+/// nodes of one row j through all slabs (x-contiguous reads), then the results are written
+/// back slab by slab in parallel.
+fn z_recursive(data: &mut [f32], dims: [usize; 3], rec: &Recursive) {
+    let [nx, ny, nz] = dims;
+    let slab = nx * ny;
+    let az = RecursiveAxis::new(rec, nz);
+    let blocks = nx.div_ceil(LANE_BLOCK);
+    let src: &[f32] = data;
+    let columns: Vec<Vec<f32>> = (0..ny * blocks)
+        .into_par_iter()
+        .map_init(Scratch::default, |sc, task| {
+            let (j, i0) = (task / blocks, (task % blocks) * LANE_BLOCK);
+            let lanes = LANE_BLOCK.min(nx - i0);
+            sc.prepare(nz * lanes);
+            for (k, row) in sc.x.chunks_exact_mut(lanes).enumerate() {
+                for (v, &s) in row.iter_mut().zip(&src[k * slab + j * nx + i0..][..lanes]) {
+                    *v = f64::from(s);
+                }
+            }
+            sc.run(&az, lanes);
+            sc.out.iter().map(|&v| v as f32).collect()
+        })
+        .collect();
+    data.par_chunks_mut(slab).enumerate().for_each(|(k, out)| {
+        for (task, column) in columns.iter().enumerate() {
+            let (j, i0) = (task / blocks, (task % blocks) * LANE_BLOCK);
+            let lanes = column.len() / nz;
+            out[j * nx + i0..][..lanes].copy_from_slice(&column[k * lanes..][..lanes]);
+        }
+    });
+}
