@@ -1,0 +1,346 @@
+//! Threshold dynamics on a signed distance function: the level-set motions φ_t + v_n|∇φ| = 0
+//! of the paper (Section 3, Algorithms 2 and 3; eq. 4.2 for inpainting) stepped by diffusion,
+//! thresholding and redistancing, one [`Flow::step`] at a time.
+//!
+//! **Why a signed distance function instead of the indicator.** The paper's algorithms (after
+//! Merriman, Bence and Osher) diffuse the characteristic function χ of the inside for Δt and
+//! threshold it. On a grid that pins the interface when √(2Δt) is below the voxel size h: the
+//! diffused indicator then barely changes at the nodes, and the thresholded set is the old one.
+//! Here the field diffused is φ itself, a signed distance function (Esedoglu, Ruuth and Tsai,
+//! "Diffusion generated motion using signed distance functions", J. Comput. Phys. 229, 2010):
+//! the heat flow gives φ̃ = φ + Δt·Δφ + O(Δt²), and Δφ is the mean curvature κ of the level set
+//! through each point, so the zero level set of φ̃ has moved by −Δt·κ: mean curvature motion to
+//! first order (a sphere's zero crossing moves from R to r with r + 2Δt/r = R exactly, for
+//! √(2Δt) ≪ R). φ̃ carries the interface at sub-voxel precision, so thresholding it at 0 (the
+//! equivalent of χ̄ > ½) is the "sub-voxel indicator" the issue asks for, and the redistancer
+//! (`levelset::redistance`, fast sweeping seeded from sub-voxel patches of the interface)
+//! rebuilds φ without moving its zero level set: nothing pins, whatever Δt/h².
+//!
+//! **The four velocities** ([`Velocity`]):
+//! * `mcf` (v = −κ): φ ← redistance(G_Δt ∗ φ). The threshold is 0.
+//! * `vpmcf` (v = κ_a − κ, Algorithm 3, Ruuth and Wetton): after the diffusion, the shift λ is
+//!   found for which {φ̃ − λ < 0} has the volume the flow started with (sub-voxel estimate of
+//!   `volume`; the target is fixed at the first step, so the volume does not drift), then
+//!   φ ← redistance(φ̃ − λ). λ/Δt is the average curvature κ_a of the step.
+//! * `expand` (v = c, Algorithm 2): for a signed distance function the exact step is the
+//!   Huygens construction φ ← φ − cΔt (the set grown by cΔt), then redistance. Algorithm 2
+//!   realises it by thresholding the diffused indicator below ½, which also adds a curvature
+//!   motion of the size of the diffusion; the signed distance does without the diffusion.
+//! * `inpaint` (v = c + κ_a − κ, eq. 4.2): the `expand` step, then the `vpmcf` step keeping the
+//!   grown volume (Lie splitting; the two commute on a sphere, where κ_a = κ).
+//!
+//! **Valid range of Δt/h²** (measured on spheres, see tests/motion_flows.rs): the scheme is
+//! first order in Δt (the curvature is taken at the new position: a sphere loses 2Δt²/r³ too
+//! much per step), so the upper limit comes from the curvature radius R of the finest feature
+//! to be followed: the diffusion width σ = √(2Δt) must stay well below R (σ ≤ R/3: Δt ≤ R²/18;
+//! at R = 24h, Δt ≤ 8h² keeps the radius within 0.3h of r² = R² − 4t down to R/2). The lower
+//! limit comes from the redistancer: each redistance moves the interface by up to about 10⁻³h,
+//! a noise that accumulates over the 1/Δt steps; below Δt ≈ 0.25h² it becomes larger than the
+//! motion's own error. Default step in the driver: 2h². The band of valid φ kept by the
+//! redistancer must cover the diffusion's reach (4σ) plus the step's motion: see
+//! [`FlowOptions::band_voxels`].
+//!
+//! **Regions.** With [`FlowOptions::region`], only the nodes of that sub-box change: each step
+//! extracts the region grown by the band and the diffusion reach, evolves that sub-grid, and
+//! writes the region back (the values around it act as fixed data, as inpainting needs).
+
+use super::diffusion::{diffuse, DiffusionOptions};
+use super::velocity::Velocity;
+use super::volume::{find_volume_shift, measure_area_in, measure_volume_in};
+use crate::grid::{Grid3, SubBox};
+use crate::levelset::redistance::{redistance, RedistanceOptions};
+use crate::{Error, Result};
+use rayon::prelude::*;
+
+mod trapezoid;
+
+/// Options of a [`Flow`].
+#[derive(Debug, Clone)]
+pub struct FlowOptions {
+    /// The heat diffusion of φ (kernel, …).
+    pub diffusion: DiffusionOptions,
+    /// Half-width of the band of φ the redistancer rebuilds after each step, **in voxels**
+    /// (beyond it φ is clamped to ± the band). `None` (default): 4σ/h + |c|Δt/h + 3, enough for
+    /// the diffusion (σ = √(2Δt)) to see a true distance wherever it moves the interface.
+    pub band_voxels: Option<f64>,
+    /// The nodes the flow may change (a sub-box of the grid); `None` (default): the whole grid.
+    pub region: Option<SubBox>,
+    /// Relative error allowed on the volume matched by `vpmcf` and `inpaint` (default 1e-9).
+    pub volume_tolerance: f64,
+    /// Second order in Δt (default true): threshold the diffused φ corrected by the implicit
+    /// trapezoidal rule (the curvature averaged between the old and the new interface; see
+    /// `flow/trapezoid.rs`). False: the plain scheme of Esedoglu, Ruuth and Tsai, first order.
+    /// The correction holds a second grid during the step.
+    pub second_order: bool,
+}
+
+impl Default for FlowOptions {
+    fn default() -> Self {
+        FlowOptions {
+            diffusion: DiffusionOptions::default(),
+            band_voxels: None,
+            region: None,
+            volume_tolerance: 1e-9,
+            second_order: true,
+        }
+    }
+}
+
+impl FlowOptions {
+    /// The redistance band for steps of `dt` with `velocity` on a grid of voxel `h`, world units.
+    pub fn band_width(&self, velocity: &Velocity, dt: f64, h: f64) -> f64 {
+        match self.band_voxels {
+            Some(b) => b * h,
+            None => {
+                let sigma = if velocity.has_curvature() {
+                    (2.0 * dt).sqrt()
+                } else {
+                    0.0
+                };
+                let growth = velocity.speed().map_or(0.0, |c| c.abs() * dt);
+                4.0 * sigma + growth + 3.0 * h
+            }
+        }
+    }
+}
+
+/// What one [`Flow::step`] did, and the shape after it.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct StepReport {
+    /// Steps taken so far (1 after the first).
+    pub step: usize,
+    /// Time after the step, world length².
+    pub time: f64,
+    /// Length of the step, world length².
+    pub dt: f64,
+    /// Sub-voxel volume of {φ < 0} after the step (within the region, when there is one), world
+    /// units³.
+    pub volume: f64,
+    /// Area estimate of the zero level set after the step (within the region), world units².
+    pub area: f64,
+    /// Threshold shift λ of `vpmcf` and `inpaint` (world units; λ/Δt is the step's average
+    /// curvature κ_a); 0 for the others.
+    pub shift: f64,
+}
+
+/// A level-set motion stepped by threshold dynamics on a signed distance function (see the
+/// module documentation).
+#[derive(Debug, Clone)]
+pub struct Flow {
+    velocity: Velocity,
+    dt: f64,
+    opts: FlowOptions,
+    time: f64,
+    steps: usize,
+    target_volume: Option<f64>,
+}
+
+impl Flow {
+    /// A flow of `velocity` in steps of `dt` (world length²) from t = 0. Errors when `dt` is not
+    /// positive and finite, the velocity's speed is invalid (see [`Velocity::validate`]), or an
+    /// option is out of range.
+    pub fn new(velocity: Velocity, dt: f64, opts: FlowOptions) -> Result<Flow> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(Error::Geometry(format!(
+                "the time step must be positive and finite (world length²), got {dt}"
+            )));
+        }
+        velocity.validate()?;
+        if let Some(b) = opts.band_voxels {
+            if !(b.is_finite() && b >= 2.0) {
+                return Err(Error::Geometry(format!(
+                    "the redistance band must be at least 2 voxels, got {b}"
+                )));
+            }
+        }
+        if !(opts.volume_tolerance >= 0.0 && opts.volume_tolerance < 1.0) {
+            return Err(Error::Geometry(format!(
+                "the volume tolerance must be in [0, 1), got {}",
+                opts.volume_tolerance
+            )));
+        }
+        Ok(Flow {
+            velocity,
+            dt,
+            opts,
+            time: 0.0,
+            steps: 0,
+            target_volume: None,
+        })
+    }
+
+    /// The velocity.
+    pub fn velocity(&self) -> Velocity {
+        self.velocity
+    }
+
+    /// The time step, world length².
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// Time reached, world length².
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// The volume `vpmcf` keeps (world units³): the volume of φ at the first step, None before.
+    pub fn target_volume(&self) -> Option<f64> {
+        self.target_volume
+    }
+
+    /// The options.
+    pub fn options(&self) -> &FlowOptions {
+        &self.opts
+    }
+
+    /// Advances `phi` (a signed distance function within the band, negative inside) by one step
+    /// of Δt. Errors on NaN in φ, a region that does not fit the grid, when the shape vanishes
+    /// (no node left inside: the message gives the time), fills the grid, or newly reaches the
+    /// grid's border (the grid needs more padding). After an error `phi` holds the state the
+    /// step reached.
+    pub fn step(&mut self, phi: &mut Grid3) -> Result<StepReport> {
+        let dims = phi.dims();
+        let h = phi.voxel();
+        let dt = self.dt;
+        let band = self.opts.band_width(&self.velocity, dt, h);
+        let border_before = border_inside(phi);
+        let (shift, volume, area) = match self.opts.region {
+            None => {
+                let region = phi.whole_box();
+                self.advance(phi, &region, band)?
+            }
+            Some(region) => {
+                if !region.fits(dims) {
+                    return Err(Error::Geometry(format!(
+                        "flow region {:?}..{:?} is empty or outside the grid of {dims:?} nodes",
+                        region.min, region.max
+                    )));
+                }
+                let reach = if self.velocity.has_curvature() {
+                    4.0 * (2.0 * dt).sqrt()
+                } else {
+                    0.0
+                };
+                let margin = ((band + reach) / h).ceil() as usize + 2;
+                let work_box = region.dilate(margin, dims);
+                let mut work = phi.extract(&work_box)?;
+                let local = SubBox::new(
+                    [0, 1, 2].map(|a| region.min[a] - work_box.min[a]),
+                    [0, 1, 2].map(|a| region.max[a] - work_box.min[a]),
+                );
+                let out = self.advance(&mut work, &local, band)?;
+                phi.write_back(&region, &work.extract(&local)?)?;
+                out
+            }
+        };
+        let t0 = self.time;
+        self.time += dt;
+        self.steps += 1;
+        let any_inside = phi.data().par_iter().any(|&v| v < 0.0);
+        if !any_inside {
+            return Err(Error::Geometry(format!(
+                "{}: the shape vanished at t = {} (no node left inside after step {}, from \
+                 t = {t0}; time in world length²)",
+                self.velocity.name(),
+                self.time,
+                self.steps
+            )));
+        }
+        if phi.data().par_iter().all(|&v| v < 0.0) {
+            return Err(Error::Geometry(format!(
+                "{}: the shape filled the whole grid at t = {} (world length²)",
+                self.velocity.name(),
+                self.time
+            )));
+        }
+        if !border_before && border_inside(phi) {
+            return Err(Error::Geometry(format!(
+                "{}: the shape reached the border of the grid at t = {} (world length²): the \
+                 grid needs more padding",
+                self.velocity.name(),
+                self.time
+            )));
+        }
+        Ok(StepReport {
+            step: self.steps,
+            time: self.time,
+            dt,
+            volume,
+            area,
+            shift,
+        })
+    }
+
+    /// One step on `grid`, whose nodes in `region` are the ones that count; returns the shift,
+    /// the volume and the area in the region.
+    fn advance(&mut self, grid: &mut Grid3, region: &SubBox, band: f64) -> Result<(f64, f64, f64)> {
+        let dt = self.dt;
+        if let Some(c) = self.velocity.speed() {
+            let d = (c * dt) as f32;
+            grid.data_mut().par_iter_mut().for_each(|v| *v -= d);
+        }
+        let mut shift = 0.0;
+        if self.velocity.has_curvature() {
+            let target = if self.velocity.preserves_volume() {
+                let before = measure_volume_in(grid, region)?;
+                Some(match self.velocity {
+                    // vpmcf keeps the volume it started with, so it does not drift.
+                    Velocity::VolumePreserving => *self.target_volume.get_or_insert(before),
+                    _ => before,
+                })
+            } else {
+                None
+            };
+            let before = self.opts.second_order.then(|| grid.clone());
+            diffuse(grid, dt, &self.opts.diffusion)?;
+            if let Some(mut delta) = before {
+                delta
+                    .data_mut()
+                    .par_iter_mut()
+                    .zip(grid.data().par_iter())
+                    .for_each(|(d, &u)| *d = u - *d);
+                trapezoid::correct(grid, &delta);
+            }
+            if let Some(target) = target {
+                shift = find_volume_shift(grid, region, target, self.opts.volume_tolerance)?;
+                let s = shift as f32;
+                grid.data_mut().par_iter_mut().for_each(|v| *v -= s);
+            }
+        }
+        redistance(
+            grid,
+            &RedistanceOptions {
+                band: Some(band),
+                ..RedistanceOptions::default()
+            },
+        )?;
+        Ok((
+            shift,
+            measure_volume_in(grid, region)?,
+            measure_area_in(grid, region)?,
+        ))
+    }
+}
+
+/// Whether a node on the grid's outer faces is inside (φ < 0).
+fn border_inside(phi: &Grid3) -> bool {
+    let [nx, ny, nz] = phi.dims();
+    let faces = [
+        SubBox::new([0, 0, 0], [1, ny, nz]),
+        SubBox::new([nx - 1, 0, 0], [nx, ny, nz]),
+        SubBox::new([0, 0, 0], [nx, 1, nz]),
+        SubBox::new([0, ny - 1, 0], [nx, ny, nz]),
+        SubBox::new([0, 0, 0], [nx, ny, 1]),
+        SubBox::new([0, 0, nz - 1], [nx, ny, nz]),
+    ];
+    faces.iter().any(|f| {
+        f.rows(phi.dims())
+            .any(|(_, _, row)| phi.data()[row].iter().any(|&v| v < 0.0))
+    })
+}

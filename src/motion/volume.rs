@@ -1,0 +1,228 @@
+//! Sub-voxel measures of the region {φ < 0} of a signed distance grid, and the threshold shift
+//! that gives it a prescribed volume (step 3 of the paper's Algorithm 3, after Ruuth and Wetton).
+//!
+//! * **Volume**: every node counts for the fraction H(φ) = clamp(½ − φ/h, 0, 1) of its voxel
+//!   (h³), the linear ramp of the smeared Heaviside of width one voxel. For a signed distance
+//!   function this is exact for a plane normal to a grid axis at any offset, its bias on a curved
+//!   surface is O(h²κ) relative (+h²/(4R²) for a sphere of radius R: 4·10⁻⁴ at R = 24h), and
+//!   since it is a continuous, piecewise-linear and non-decreasing function of a shift λ of φ,
+//!   it changes smoothly as the interface moves: the same estimate step after step is what the
+//!   volume-preserving flows match.
+//! * **Area**: Σ δ_ε(φ)·h³ with the cosine delta δ_ε(φ) = (1 + cos(πφ/ε))/(2ε) for |φ| < ε,
+//!   ε = 1.5h (the smoothed delta of Osher and Fedkiw's level-set book); for a signed distance
+//!   function it is a first-order estimate (about 1% on a sphere of 12 voxels of radius).
+//! * **Volume shift**: the λ for which {φ − λ < 0} has the target volume, by a safeguarded
+//!   Newton iteration on the piecewise-linear volume (its slope is h² times the nodes on the
+//!   ramp, i.e. about the area), over the nodes near the interface gathered once.
+//!
+//! All three work on a [`SubBox`] of the grid (the whole grid or the region a flow may change)
+//! and run in parallel over z-layers (rayon).
+
+use crate::grid::{Grid3, SubBox};
+use crate::{Error, Result};
+use rayon::prelude::*;
+
+/// Half-width of the smoothed delta of the area estimate, in voxels.
+const DELTA_WIDTH_VOXELS: f64 = 1.5;
+
+/// Fraction of a node's voxel inside: the ramp clamp(½ − φ/h, 0, 1), φ in voxels.
+#[inline]
+fn inside_fraction(phi_vox: f64) -> f64 {
+    (0.5 - phi_vox).clamp(0.0, 1.0)
+}
+
+/// Sums `f(value)` over the nodes of `region` (which must fit the grid), in parallel by z-layer.
+fn sum_over(phi: &Grid3, region: &SubBox, f: impl Fn(f32) -> f64 + Sync) -> f64 {
+    let dims = phi.dims();
+    let data = phi.data();
+    (region.min[2]..region.max[2])
+        .into_par_iter()
+        .map(|k| {
+            let layer = SubBox::new(
+                [region.min[0], region.min[1], k],
+                [region.max[0], region.max[1], k + 1],
+            );
+            layer
+                .rows(dims)
+                .map(|(_, _, row)| data[row].iter().map(|&v| f(v)).sum::<f64>())
+                .sum::<f64>()
+        })
+        .sum()
+}
+
+fn check_region(phi: &Grid3, region: &SubBox) -> Result<()> {
+    if region.fits(phi.dims()) {
+        Ok(())
+    } else {
+        Err(Error::Geometry(format!(
+            "region {:?}..{:?} is empty or outside the grid of {:?} nodes",
+            region.min,
+            region.max,
+            phi.dims()
+        )))
+    }
+}
+
+/// Sub-voxel volume of {φ < 0} (world units³) over the whole grid; see the module documentation.
+/// φ must be a signed distance function near its zero level set.
+pub fn measure_volume(phi: &Grid3) -> f64 {
+    measure_volume_in(phi, &phi.whole_box()).unwrap_or(0.0)
+}
+
+/// [`measure_volume`] over the nodes of `region` only. Errors when the region does not fit.
+pub fn measure_volume_in(phi: &Grid3, region: &SubBox) -> Result<f64> {
+    check_region(phi, region)?;
+    let h = phi.voxel();
+    let inv_h = 1.0 / h;
+    Ok(sum_over(phi, region, |v| inside_fraction(v as f64 * inv_h)) * h * h * h)
+}
+
+/// Area estimate of the zero level set (world units²) over the whole grid; see the module
+/// documentation. φ must be a signed distance function near its zero level set.
+pub fn measure_area(phi: &Grid3) -> f64 {
+    measure_area_in(phi, &phi.whole_box()).unwrap_or(0.0)
+}
+
+/// [`measure_area`] over the nodes of `region` only. Errors when the region does not fit.
+pub fn measure_area_in(phi: &Grid3, region: &SubBox) -> Result<f64> {
+    check_region(phi, region)?;
+    let h = phi.voxel();
+    let eps = DELTA_WIDTH_VOXELS;
+    let inv_h = 1.0 / h;
+    let sum = sum_over(phi, region, |v| {
+        let x = v as f64 * inv_h;
+        if x.abs() < eps {
+            (1.0 + (std::f64::consts::PI * x / eps).cos()) / (2.0 * eps)
+        } else {
+            0.0
+        }
+    });
+    // Σ δ(φ/h)/h · h³ with δ in per-voxel units.
+    Ok(sum * h * h)
+}
+
+/// The nodes near the interface, for evaluating the volume of {φ < λ} at many λ.
+struct NearInterface {
+    /// φ/h of the nodes with |φ/h| < window.
+    values: Vec<f32>,
+    /// Nodes with φ/h ≤ −window (wholly inside for |λ/h| ≤ window − ½).
+    inside: usize,
+}
+
+impl NearInterface {
+    fn gather(phi: &Grid3, region: &SubBox, window: f64) -> NearInterface {
+        let dims = phi.dims();
+        let data = phi.data();
+        let inv_h = 1.0 / phi.voxel();
+        let parts: Vec<(Vec<f32>, usize)> = (region.min[2]..region.max[2])
+            .into_par_iter()
+            .map(|k| {
+                let layer = SubBox::new(
+                    [region.min[0], region.min[1], k],
+                    [region.max[0], region.max[1], k + 1],
+                );
+                let mut values = Vec::new();
+                let mut inside = 0usize;
+                for (_, _, row) in layer.rows(dims) {
+                    for &v in &data[row] {
+                        let x = v as f64 * inv_h;
+                        if x <= -window {
+                            inside += 1;
+                        } else if x < window {
+                            values.push(x as f32);
+                        }
+                    }
+                }
+                (values, inside)
+            })
+            .collect();
+        let inside = parts.iter().map(|p| p.1).sum();
+        let values = parts.into_iter().flat_map(|p| p.0).collect();
+        NearInterface { values, inside }
+    }
+
+    /// Volume of {φ − λ < 0} in voxels³ and its derivative in λ (voxels²), λ in voxels with
+    /// |λ| ≤ window − ½.
+    fn volume(&self, lambda: f64) -> (f64, f64) {
+        let (sum, slope) = self
+            .values
+            .par_chunks(1 << 14)
+            .map(|chunk| {
+                chunk.iter().fold((0.0, 0usize), |(s, n), &x| {
+                    let t = 0.5 - (x as f64 - lambda);
+                    if t >= 1.0 {
+                        (s + 1.0, n)
+                    } else if t > 0.0 {
+                        (s + t, n + 1)
+                    } else {
+                        (s, n)
+                    }
+                })
+            })
+            .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        (self.inside as f64 + sum, slope as f64)
+    }
+}
+
+/// The shift λ (world units) for which {φ − λ < 0} has the sub-voxel volume `target` (world
+/// units³, as [`measure_volume_in`] measures it) over the nodes of `region`, found to a relative
+/// volume error of `tolerance` (or to 10⁻⁹ voxel in λ). λ > 0 grows the region. Errors when the
+/// region does not fit, when `target` is not positive and finite, or when no shift reaches it
+/// (the target is more than the region's whole volume).
+pub fn find_volume_shift(phi: &Grid3, region: &SubBox, target: f64, tolerance: f64) -> Result<f64> {
+    check_region(phi, region)?;
+    let h = phi.voxel();
+    let capacity = region.node_count() as f64 * h * h * h;
+    if !(target.is_finite() && target > 0.0 && target < capacity) {
+        return Err(Error::Geometry(format!(
+            "no threshold gives the volume {target}: it must be positive and below the \
+             region's {capacity}"
+        )));
+    }
+    let goal = target / (h * h * h);
+    let tol = (tolerance.max(0.0) * goal).max(1e-12 * goal);
+    let dims = region.dims();
+    let span = dims[0].max(dims[1]).max(dims[2]) as f64 + 2.0;
+    let mut window = 4.0f64;
+    loop {
+        let near = NearInterface::gather(phi, region, window);
+        let reach = window - 0.5;
+        let (v_lo, _) = near.volume(-reach);
+        let (v_hi, _) = near.volume(reach);
+        if goal < v_lo || goal > v_hi {
+            if window > span {
+                return Err(Error::Geometry(format!(
+                    "no threshold gives the volume {target} (the region holds {} to {})",
+                    v_lo * h * h * h,
+                    v_hi * h * h * h
+                )));
+            }
+            window *= 4.0;
+            continue;
+        }
+        let (mut lo, mut hi) = (-reach, reach);
+        let mut lambda = 0.0f64.clamp(lo, hi);
+        for _ in 0..200 {
+            let (v, slope) = near.volume(lambda);
+            let err = v - goal;
+            if err.abs() <= tol {
+                return Ok(lambda * h);
+            }
+            if err < 0.0 {
+                lo = lambda;
+            } else {
+                hi = lambda;
+            }
+            if hi - lo < 1e-9 {
+                return Ok(0.5 * (lo + hi) * h);
+            }
+            let newton = lambda - err / slope;
+            lambda = if slope > 0.0 && newton > lo && newton < hi {
+                newton
+            } else {
+                0.5 * (lo + hi)
+            };
+        }
+        return Ok(lambda * h);
+    }
+}
