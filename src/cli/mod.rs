@@ -4,6 +4,7 @@
 
 mod cap;
 mod compare;
+mod evolve;
 mod grid_args;
 mod info;
 mod progress;
@@ -50,6 +51,9 @@ pub enum Command {
     Voxelize(voxelize::VoxelizeArgs),
     /// Mesh → signed distance grid → marching cubes: a closed, manifold, outward mesh.
     Remesh(remesh::RemeshArgs),
+    /// Evolve a surface by a level-set motion (mean curvature, volume-preserving, constant speed,
+    /// inpainting) solved by threshold dynamics; writes the evolved surface.
+    Evolve(evolve::EvolveArgs),
 }
 
 /// Global settings every command sees.
@@ -93,6 +97,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Compare(args) => compare::run(&ctx, &args),
         Command::Voxelize(args) => voxelize::run(&ctx, &args),
         Command::Remesh(args) => remesh::run(&ctx, &args),
+        Command::Evolve(args) => evolve::run(&ctx, &args),
     }
 }
 

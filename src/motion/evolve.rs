@@ -2,7 +2,7 @@
 //! [`Flow`] steps up to the final time, reporting each step to a callback (the CLI's progress
 //! bar and its per-step JSON).
 
-use super::flow::{Flow, FlowOptions, StepReport};
+use super::flow::{Flow, FlowOptions, StepReport, MIN_DT_VOXELS2};
 use super::velocity::Velocity;
 use crate::grid::Grid3;
 use crate::levelset::redistance::{redistance, RedistanceOptions};
@@ -38,7 +38,8 @@ pub fn step_count(total_time: f64, dt: f64) -> Result<usize> {
 /// region never change), then stepped by [`Flow::step`]; `progress` sees every step's report as
 /// it is done.
 ///
-/// Errors: `total_time` or `dt` not positive and finite, an invalid velocity or option, NaN in
+/// Errors: `total_time` or `dt` not positive and finite, steps below [`MIN_DT_VOXELS2`]·h² for
+/// the curvature flows, an invalid velocity or option, NaN in
 /// φ, no node inside at the start, and the errors of [`Flow::step`] — among them the shape
 /// vanishing before `total_time` (e.g. a small shape under `mcf`), whose message gives the time.
 /// `phi` then holds the last state reached, which the caller should not use as a result.
@@ -53,6 +54,20 @@ pub fn evolve(
     let n = step_count(total_time, dt)?;
     let step = total_time / n as f64;
     let mut flow = Flow::new(velocity, step, opts.clone())?;
+    let h = phi.voxel();
+    if velocity.has_curvature() && step < MIN_DT_VOXELS2 * h * h {
+        return Err(Error::Geometry(format!(
+            "{}: steps of {step} are below the smallest step {MIN_DT_VOXELS2}h² = {} of the \
+             curvature flows (h = {h}){}",
+            velocity.name(),
+            MIN_DT_VOXELS2 * h * h,
+            if total_time < MIN_DT_VOXELS2 * h * h {
+                ": the final time is shorter than one such step"
+            } else {
+                ": give a larger step"
+            }
+        )));
+    }
     if opts.region.is_none() {
         let band = opts.band_width(&velocity, step, phi.voxel());
         redistance(

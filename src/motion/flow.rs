@@ -29,16 +29,24 @@
 //! * `inpaint` (v = c + κ_a − κ, eq. 4.2): the `expand` step, then the `vpmcf` step keeping the
 //!   grown volume (Lie splitting; the two commute on a sphere, where κ_a = κ).
 //!
-//! **Valid range of Δt/h²** (measured on spheres, see tests/motion_flows.rs): the scheme is
-//! first order in Δt (the curvature is taken at the new position: a sphere loses 2Δt²/r³ too
-//! much per step), so the upper limit comes from the curvature radius R of the finest feature
-//! to be followed: the diffusion width σ = √(2Δt) must stay well below R (σ ≤ R/3: Δt ≤ R²/18;
-//! at R = 24h, Δt ≤ 8h² keeps the radius within 0.3h of r² = R² − 4t down to R/2). The lower
-//! limit comes from the redistancer: each redistance moves the interface by up to about 10⁻³h,
-//! a noise that accumulates over the 1/Δt steps; below Δt ≈ 0.25h² it becomes larger than the
-//! motion's own error. Default step in the driver: 2h². The band of valid φ kept by the
-//! redistancer must cover the diffusion's reach (4σ) plus the step's motion: see
-//! [`FlowOptions::band_voxels`].
+//! **Second order.** Thresholding the diffused φ is first order in Δt (the curvature is taken
+//! at the new surface, and the diffusion adds a term that is no part of the motion); by default
+//! ([`FlowOptions::second_order`]) the diffused φ is corrected near the surface by the
+//! trapezoidal rule and for the remaining umbilic defect (see `flow/second_order.rs`).
+//!
+//! **Valid range of Δt/h²** (measured, see tests/motion_flows.rs; h the voxel):
+//! * Lower limit 0.25h² (σ = √(2Δt) ≥ 0.7h), which [`Flow::step`] enforces: below it the
+//!   Gaussian sampled on the grid has less variance than the heat kernel (0.2% less at
+//!   σ = 0.7h, 30% at 0.45h), so the surface moves too slowly (a sphere shrinking from 24h to
+//!   12h in steps of 0.1h² ends 4.5h too large). Each redistance moves the surface by about
+//!   10⁻³h or less, a noise that stays below the scheme's own error from 0.25h² up: a sphere of
+//!   24h follows r² = R² − 4t within 0.04h at 0.25h², 0.002h at 0.5h² and 2h².
+//! * No sharp upper limit: a sphere of 24h stays within 0.01h of r² = R² − 4t down to half its
+//!   radius at Δt = 8h² and within 0.03h at 32h², a cylinder of 16h within 0.09h of
+//!   r² = R² − 2t at 8h². What bounds Δt is the smallest feature to be followed: σ should stay
+//!   below about half its radius of curvature (thinner parts vanish within a step or two
+//!   instead of shrinking smoothly), and the redistancer's band, so the work per step, grows
+//!   as 4σ. Default step of the driver and the CLI: 2h².
 //!
 //! **Regions.** With [`FlowOptions::region`], only the nodes of that sub-box change: each step
 //! extracts the region grown by the band and the diffusion reach, evolves that sub-grid, and
@@ -52,7 +60,10 @@ use crate::levelset::redistance::{redistance, RedistanceOptions};
 use crate::{Error, Result};
 use rayon::prelude::*;
 
-mod trapezoid;
+mod second_order;
+
+/// Smallest time step, in voxels² (h²): see the module documentation.
+pub const MIN_DT_VOXELS2: f64 = 0.25;
 
 /// Options of a [`Flow`].
 #[derive(Debug, Clone)]
@@ -68,9 +79,10 @@ pub struct FlowOptions {
     /// Relative error allowed on the volume matched by `vpmcf` and `inpaint` (default 1e-9).
     pub volume_tolerance: f64,
     /// Second order in Δt (default true): threshold the diffused φ corrected by the implicit
-    /// trapezoidal rule (the curvature averaged between the old and the new interface; see
-    /// `flow/trapezoid.rs`). False: the plain scheme of Esedoglu, Ruuth and Tsai, first order.
-    /// The correction holds a second grid during the step.
+    /// trapezoidal rule (the curvature averaged between the old and the new interface) and for
+    /// the remaining umbilic defect κ(κ₁ − κ₂)² (see `flow/second_order.rs`). False: the plain
+    /// scheme of Esedoglu, Ruuth and Tsai, first order. The correction holds three more grids
+    /// during the step.
     pub second_order: bool,
 }
 
@@ -208,6 +220,14 @@ impl Flow {
         let dims = phi.dims();
         let h = phi.voxel();
         let dt = self.dt;
+        if self.velocity.has_curvature() && dt < MIN_DT_VOXELS2 * h * h {
+            return Err(Error::Geometry(format!(
+                "the time step {dt} is below {MIN_DT_VOXELS2}h² = {} (h = {h}): the Gaussian on \
+                 the grid no longer has the heat kernel's variance there and the surface would \
+                 move too slowly; take larger steps (or a finer grid)",
+                MIN_DT_VOXELS2 * h * h
+            )));
+        }
         let band = self.opts.band_width(&self.velocity, dt, h);
         let border_before = border_inside(phi);
         let (shift, volume, area) = match self.opts.region {
@@ -297,15 +317,18 @@ impl Flow {
             } else {
                 None
             };
-            let before = self.opts.second_order.then(|| grid.clone());
-            diffuse(grid, dt, &self.opts.diffusion)?;
-            if let Some(mut delta) = before {
+            if self.opts.second_order {
+                let phi = grid.clone();
+                diffuse(grid, dt, &self.opts.diffusion)?;
+                let mut delta = phi.clone();
                 delta
                     .data_mut()
                     .par_iter_mut()
                     .zip(grid.data().par_iter())
                     .for_each(|(d, &u)| *d = u - *d);
-                trapezoid::correct(grid, &delta);
+                second_order::correct(grid, &phi, &delta, dt);
+            } else {
+                diffuse(grid, dt, &self.opts.diffusion)?;
             }
             if let Some(target) = target {
                 shift = find_volume_shift(grid, region, target, self.opts.volume_tolerance)?;

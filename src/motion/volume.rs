@@ -1,19 +1,22 @@
 //! Sub-voxel measures of the region {φ < 0} of a signed distance grid, and the threshold shift
 //! that gives it a prescribed volume (step 3 of the paper's Algorithm 3, after Ruuth and Wetton).
 //!
-//! * **Volume**: every node counts for the fraction H(φ) = clamp(½ − φ/h, 0, 1) of its voxel
-//!   (h³), the linear ramp of the smeared Heaviside of width one voxel. For a signed distance
-//!   function this is exact for a plane normal to a grid axis at any offset, its bias on a curved
-//!   surface is O(h²κ) relative (+h²/(4R²) for a sphere of radius R: 4·10⁻⁴ at R = 24h), and
-//!   since it is a continuous, piecewise-linear and non-decreasing function of a shift λ of φ,
-//!   it changes smoothly as the interface moves: the same estimate step after step is what the
-//!   volume-preserving flows match.
+//! * **Volume**: every node counts for the fraction H_ε(φ) of its voxel (h³), H_ε the smoothed
+//!   Heaviside of half-width ε = h whose derivative is the cosine delta below:
+//!   H_ε(φ) = ½(1 − φ/ε − sin(πφ/ε)/π) for |φ| < ε, 1 inside, 0 outside. Being smooth, its sum
+//!   over the nodes hardly depends on where the surface sits between them: on spheres of 10
+//!   voxels at random offsets it varies by 2·10⁻⁵ (relative), against 5·10⁻⁴ for the linear
+//!   ramp clamp(½ − φ/h, 0, 1). Its bias is smooth too: for a signed distance function the
+//!   estimate is V + m·∫κ dA with m = (1/6 − 1/π²)ε² ≈ 0.065h², i.e. +0.39h²/R² relative on a
+//!   sphere of radius R (7·10⁻⁴ at R = 24h), and it changes only as the integral of the mean
+//!   curvature does. So the estimate is consistent from step to step, which is what the
+//!   volume-preserving flows need, and it is a smooth, increasing function of a shift λ of φ.
 //! * **Area**: Σ δ_ε(φ)·h³ with the cosine delta δ_ε(φ) = (1 + cos(πφ/ε))/(2ε) for |φ| < ε,
 //!   ε = 1.5h (the smoothed delta of Osher and Fedkiw's level-set book); for a signed distance
 //!   function it is a first-order estimate (about 1% on a sphere of 12 voxels of radius).
 //! * **Volume shift**: the λ for which {φ − λ < 0} has the target volume, by a safeguarded
-//!   Newton iteration on the piecewise-linear volume (its slope is h² times the nodes on the
-//!   ramp, i.e. about the area), over the nodes near the interface gathered once.
+//!   Newton iteration (the slope of the volume in λ is the area estimate), over the nodes near
+//!   the interface gathered once.
 //!
 //! All three work on a [`SubBox`] of the grid (the whole grid or the region a flow may change)
 //! and run in parallel over z-layers (rayon).
@@ -25,10 +28,24 @@ use rayon::prelude::*;
 /// Half-width of the smoothed delta of the area estimate, in voxels.
 const DELTA_WIDTH_VOXELS: f64 = 1.5;
 
-/// Fraction of a node's voxel inside: the ramp clamp(½ − φ/h, 0, 1), φ in voxels.
+/// Half-width of the smoothed Heaviside of the volume estimate, in voxels.
+const HEAVISIDE_WIDTH_VOXELS: f64 = 1.0;
+
+/// Fraction of a node's voxel inside, H_ε(φ) with φ in voxels, and its derivative −dH/dφ.
 #[inline]
-fn inside_fraction(phi_vox: f64) -> f64 {
-    (0.5 - phi_vox).clamp(0.0, 1.0)
+fn inside_fraction(phi_vox: f64) -> (f64, f64) {
+    let e = HEAVISIDE_WIDTH_VOXELS;
+    if phi_vox <= -e {
+        (1.0, 0.0)
+    } else if phi_vox >= e {
+        (0.0, 0.0)
+    } else {
+        let a = std::f64::consts::PI * phi_vox / e;
+        (
+            0.5 * (1.0 - phi_vox / e - a.sin() / std::f64::consts::PI),
+            (1.0 + a.cos()) / (2.0 * e),
+        )
+    }
 }
 
 /// Sums `f(value)` over the nodes of `region` (which must fit the grid), in parallel by z-layer.
@@ -74,7 +91,7 @@ pub fn measure_volume_in(phi: &Grid3, region: &SubBox) -> Result<f64> {
     check_region(phi, region)?;
     let h = phi.voxel();
     let inv_h = 1.0 / h;
-    Ok(sum_over(phi, region, |v| inside_fraction(v as f64 * inv_h)) * h * h * h)
+    Ok(sum_over(phi, region, |v| inside_fraction(v as f64 * inv_h).0) * h * h * h)
 }
 
 /// Area estimate of the zero level set (world units²) over the whole grid; see the module
@@ -105,7 +122,7 @@ pub fn measure_area_in(phi: &Grid3, region: &SubBox) -> Result<f64> {
 struct NearInterface {
     /// φ/h of the nodes with |φ/h| < window.
     values: Vec<f32>,
-    /// Nodes with φ/h ≤ −window (wholly inside for |λ/h| ≤ window − ½).
+    /// Nodes with φ/h ≤ −window (wholly inside for |λ/h| ≤ window − ε).
     inside: usize,
 }
 
@@ -142,25 +159,19 @@ impl NearInterface {
     }
 
     /// Volume of {φ − λ < 0} in voxels³ and its derivative in λ (voxels²), λ in voxels with
-    /// |λ| ≤ window − ½.
+    /// |λ| ≤ window − ε.
     fn volume(&self, lambda: f64) -> (f64, f64) {
         let (sum, slope) = self
             .values
             .par_chunks(1 << 14)
             .map(|chunk| {
-                chunk.iter().fold((0.0, 0usize), |(s, n), &x| {
-                    let t = 0.5 - (x as f64 - lambda);
-                    if t >= 1.0 {
-                        (s + 1.0, n)
-                    } else if t > 0.0 {
-                        (s + t, n + 1)
-                    } else {
-                        (s, n)
-                    }
+                chunk.iter().fold((0.0, 0.0), |(s, d), &x| {
+                    let (f, df) = inside_fraction(x as f64 - lambda);
+                    (s + f, d + df)
                 })
             })
-            .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-        (self.inside as f64 + sum, slope as f64)
+            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        (self.inside as f64 + sum, slope)
     }
 }
 
@@ -186,7 +197,7 @@ pub fn find_volume_shift(phi: &Grid3, region: &SubBox, target: f64, tolerance: f
     let mut window = 4.0f64;
     loop {
         let near = NearInterface::gather(phi, region, window);
-        let reach = window - 0.5;
+        let reach = window - HEAVISIDE_WIDTH_VOXELS;
         let (v_lo, _) = near.volume(-reach);
         let (v_hi, _) = near.volume(reach);
         if goal < v_lo || goal > v_hi {

@@ -268,7 +268,8 @@ impl Sweeper<'_> {
                 }
                 if let (Some(qy), Some(_)) = (y_up, z_up) {
                     // The diagonal row, read when the y and z sides both match.
-                    let q = qy + (z_up.unwrap() as isize - r as isize) as usize;
+                    // Summed before subtracting: the z offset may be negative (no overflow in debug builds).
+                    let q = qy + z_up.unwrap() - r;
                     let seen = self.visited[slot(1)]
                         .load(Relaxed)
                         .min(self.visited[slot(2)].load(Relaxed));
