@@ -31,8 +31,8 @@
 //!   voxels, recursive from there on.
 //!
 //! Measured on a 256³ grid (CPU time of both threads, shared 2-core machine): the truncated
-//! kernel costs ∝ σ (≈ 34, 58, 110, 210, 310 ms at σ = 1, 2, 4, 8, 12 voxels), the recursive
-//! one 210–280 ms at any σ; they cross near σ = 10. Both match scipy's `gaussian_filter`
+//! kernel costs ∝ σ (≈ 28, 46, 78, 164, 258 ms at σ = 1, 2, 4, 8, 12 voxels), the recursive
+//! one 205–275 ms at any σ; they cross near σ = 12. Both match scipy's `gaussian_filter`
 //! (mode "reflect") to f32 rounding (truncated, same cut) or to ~3e-6 of the kernel's peak
 //! (recursive, against an uncut Gaussian); wall-clock ratios to scipy are in benches/motion.rs.
 
@@ -45,7 +45,7 @@ pub const DEFAULT_RADIUS_SIGMAS: f64 = 4.0;
 
 /// [`DiffusionKernel::Auto`] uses the truncated kernel (ρ = 4) below this σ, in voxels, and the
 /// recursive filter from it on (where the two cost about the same on a 256³ grid).
-pub const AUTO_RECURSIVE_FROM_SIGMA: f64 = 10.0;
+pub const AUTO_RECURSIVE_FROM_SIGMA: f64 = 12.0;
 
 /// The recursive filter takes σ (voxels) as at most this (its poles would round to 1 beyond
 /// ~1e15): already the mean of every line, to f32 precision, on axes of up to 1e6 nodes.
@@ -229,19 +229,77 @@ fn fold_weights(w: &[f64], n: usize) -> Vec<f32> {
     half
 }
 
-/// out = w0·centre.
+/// Nodes per block of [`convolve`], accumulated in registers.
+const BLOCK: usize = 16;
+
+/// out[i] = w[0]·buf[centre + i] + Σ_t w[t]·(buf[below[t−1] + i] + buf[above[t−1] + i]) for
+/// every i < out.len(): the symmetric kernel over rows of `buf` starting at the given offsets.
+/// Blocks of [`BLOCK`] nodes are summed over all the kernel's taps before being stored.
 #[inline]
-fn scale_into(out: &mut [f32], w0: f32, centre: &[f32]) {
-    for (o, &c) in out.iter_mut().zip(centre) {
-        *o = w0 * c;
+fn convolve(
+    out: &mut [f32],
+    w: &[f32],
+    buf: &[f32],
+    centre: usize,
+    below: &[usize],
+    above: &[usize],
+) {
+    let taps = || w[1..].iter().zip(below).zip(above);
+    let mut blocks = out.chunks_exact_mut(BLOCK);
+    let mut i0 = 0;
+    for block in &mut blocks {
+        let mut acc = [0.0f32; BLOCK];
+        for (a, &c) in acc.iter_mut().zip(&buf[centre + i0..][..BLOCK]) {
+            *a = w[0] * c;
+        }
+        for ((&wt, &lo), &hi) in taps() {
+            let (x, y) = (&buf[lo + i0..][..BLOCK], &buf[hi + i0..][..BLOCK]);
+            for ((a, &u), &v) in acc.iter_mut().zip(x).zip(y) {
+                *a += wt * (u + v);
+            }
+        }
+        block.copy_from_slice(&acc);
+        i0 += BLOCK;
+    }
+    let rest = blocks.into_remainder();
+    let m = rest.len();
+    for (o, &c) in rest.iter_mut().zip(&buf[centre + i0..][..m]) {
+        *o = w[0] * c;
+    }
+    for ((&wt, &lo), &hi) in taps() {
+        let (x, y) = (&buf[lo + i0..][..m], &buf[hi + i0..][..m]);
+        for ((o, &u), &v) in rest.iter_mut().zip(x).zip(y) {
+            *o += wt * (u + v);
+        }
     }
 }
 
-/// out += w·(a + b).
-#[inline]
-fn add_pair(out: &mut [f32], w: f32, a: &[f32], b: &[f32]) {
-    for ((o, &x), &y) in out.iter_mut().zip(a).zip(b) {
-        *o += w * (x + y);
+/// Offsets scratch of the truncated passes: where each tap's rows start.
+#[derive(Default)]
+struct Taps {
+    below: Vec<usize>,
+    above: Vec<usize>,
+}
+
+impl Taps {
+    /// Offsets `stride`·reflect(c ∓ t, n) for t = 1..=r.
+    fn mirrored(&mut self, c: usize, r: usize, n: usize, stride: usize) {
+        self.below.clear();
+        self.above.clear();
+        for t in 1..=r as isize {
+            self.below.push(reflect(c as isize - t, n) * stride);
+            self.above.push(reflect(c as isize + t, n) * stride);
+        }
+    }
+
+    /// Offsets `stride`·(c ∓ t) for t = 1..=r (rows padded with their mirror images).
+    fn padded(&mut self, c: usize, r: usize, stride: usize) {
+        self.below.clear();
+        self.above.clear();
+        for t in 1..=r {
+            self.below.push((c - t) * stride);
+            self.above.push((c + t) * stride);
+        }
     }
 }
 
@@ -250,35 +308,24 @@ fn xy_truncated(data: &mut [f32], dims: [usize; 3], wx: &[f32], wy: &[f32]) {
     let [nx, ny, _] = dims;
     let r = wx.len() - 1;
     data.par_chunks_mut(nx * ny).for_each_init(
-        || (Vec::new(), Vec::new()),
-        |(scratch, padded): &mut (Vec<f32>, Vec<f32>), slab| {
+        || (Vec::new(), Taps::default()),
+        |(scratch, taps): &mut (Vec<f32>, Taps), slab| {
             if ny > 1 {
                 scratch.clear();
                 scratch.extend_from_slice(slab);
-                let row = |j: isize| &scratch[reflect(j, ny) * nx..][..nx];
                 for (j, out) in slab.chunks_exact_mut(nx).enumerate() {
-                    let j = j as isize;
-                    scale_into(out, wy[0], row(j));
-                    for (t, &wt) in wy.iter().enumerate().skip(1) {
-                        add_pair(out, wt, row(j - t as isize), row(j + t as isize));
-                    }
+                    taps.mirrored(j, wy.len() - 1, ny, nx);
+                    convolve(out, wy, scratch, j * nx, &taps.below, &taps.above);
                 }
             }
             if nx > 1 {
+                taps.padded(r, r, 1);
                 for out in slab.chunks_exact_mut(nx) {
-                    padded.clear();
-                    padded.extend((0..r).map(|p| out[reflect(p as isize - r as isize, nx)]));
-                    padded.extend_from_slice(out);
-                    padded.extend((0..r).map(|p| out[reflect((nx + p) as isize, nx)]));
-                    scale_into(out, wx[0], &padded[r..r + nx]);
-                    for (t, &wt) in wx.iter().enumerate().skip(1) {
-                        add_pair(
-                            out,
-                            wt,
-                            &padded[r - t..r - t + nx],
-                            &padded[r + t..r + t + nx],
-                        );
-                    }
+                    scratch.clear();
+                    scratch.extend((0..r).map(|p| out[reflect(p as isize - r as isize, nx)]));
+                    scratch.extend_from_slice(out);
+                    scratch.extend((0..r).map(|p| out[reflect((nx + p) as isize, nx)]));
+                    convolve(out, wx, scratch, r, &taps.below, &taps.above);
                 }
             }
         },
@@ -293,21 +340,20 @@ fn z_truncated(data: &mut [f32], dims: [usize; 3], w: &[f32]) {
     let r = w.len() - 1;
     column_tiles(data, nx * ny, Z_TILE)
         .into_par_iter()
-        .for_each_init(Vec::new, |buf: &mut Vec<f32>, mut column| {
-            let width = column[0].len();
-            buf.clear();
-            for p in 0..nz + 2 * r {
-                buf.extend_from_slice(column[reflect(p as isize - r as isize, nz)]);
-            }
-            let row = |p: usize| &buf[p * width..][..width];
-            for (k, out) in column.iter_mut().enumerate() {
-                let c = k + r;
-                scale_into(out, w[0], row(c));
-                for (t, &wt) in w.iter().enumerate().skip(1) {
-                    add_pair(out, wt, row(c - t), row(c + t));
+        .for_each_init(
+            || (Vec::new(), Taps::default()),
+            |(buf, taps): &mut (Vec<f32>, Taps), mut column| {
+                let width = column[0].len();
+                buf.clear();
+                for p in 0..nz + 2 * r {
+                    buf.extend_from_slice(column[reflect(p as isize - r as isize, nz)]);
                 }
-            }
-        });
+                for (k, out) in column.iter_mut().enumerate() {
+                    taps.padded(k + r, r, width);
+                    convolve(out, w, buf, (k + r) * width, &taps.below, &taps.above);
+                }
+            },
+        );
 }
 
 /// The nodes of `data` (slabs of `slab` nodes) as columns of tiles: column c holds, for each
