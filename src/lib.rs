@@ -13,9 +13,9 @@ pub mod grid;
 pub mod io;
 pub mod levelset;
 pub mod mesh;
+pub mod motion;
 pub mod msr;
 pub mod report;
-pub mod motion;
 
 pub use error::{Error, Result};
 pub use mesh::TriMesh;
