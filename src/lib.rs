@@ -2,9 +2,12 @@
 //! representation (MSR) and surface inpainting of Dong, Chien, Shen and Osher.
 //!
 //! Data types live apart from the operations on them: `mesh` (the triangle mesh, its topology and
-//! measures, capping of open ends), `io` (STL, OBJ and PLY), `bvh` (closest point, ray casts and
-//! the fast generalized winding number on a bounding volume hierarchy), and `cli` (the
-//! command-line tool; `main.rs` only calls it).
+//! measures, capping of open ends), `io` (meshes as STL, OBJ and PLY; grids as npy, vti, nrrd;
+//! npz archives), `bvh` (closest point, ray casts and the fast generalized winding number on a
+//! bounding volume hierarchy), `grid` (the dense grid and its transform), `levelset` (voxelize,
+//! redistance, marching cubes), `motion` (diffusion and threshold-dynamics flows), `msr` (the
+//! multiscale representation: decompose, reconstruct, archive), `report` (figures), and `cli`
+//! (the command-line tool; `main.rs` only calls it).
 
 pub mod bvh;
 pub mod cli;
@@ -13,9 +16,9 @@ pub mod grid;
 pub mod io;
 pub mod levelset;
 pub mod mesh;
+pub mod motion;
 pub mod msr;
 pub mod report;
-pub mod motion;
 
 pub use error::{Error, Result};
 pub use mesh::TriMesh;

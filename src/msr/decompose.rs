@@ -93,7 +93,9 @@ pub struct Decomposition {
 /// The resolved time, step and steps per level for `opts` on a grid of voxel `h`.
 pub fn level_schedule(opts: &DecomposeOptions, h: f64) -> Result<(f64, f64, usize)> {
     if opts.levels == 0 {
-        return Err(Error::Geometry("the number of levels must be at least 1".into()));
+        return Err(Error::Geometry(
+            "the number of levels must be at least 1".into(),
+        ));
     }
     let time = opts.time.unwrap_or(opts.levels as f64 * 4.0 * h * h);
     if !(time.is_finite() && time > 0.0) {
@@ -169,7 +171,8 @@ pub fn decompose(
             })
             .collect();
         let mean_abs = wn.iter().map(|v| v.abs()).sum::<f64>() / wn.len().max(1) as f64;
-        let sparse = wn.iter().filter(|v| v.abs() < 0.1 * h).count() as f64 / wn.len().max(1) as f64;
+        let sparse =
+            wn.iter().filter(|v| v.abs() < 0.1 * h).count() as f64 / wn.len().max(1) as f64;
         reports.push(LevelReport {
             level,
             time: last.time,

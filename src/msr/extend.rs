@@ -4,59 +4,13 @@
 //! A node y of the band takes its foot point on the zero level set, f = y − φ(y)∇φ(y)/|∇φ(y)|²
 //! (the closest point when φ is a signed distance), and there the mean of the values of the
 //! nearest samples (see [`extend_to_band`]). So the value is constant along each normal line, as
-//! the paper's extension is. The samples are found through a uniform hash grid.
+//! the paper's extension is. The samples are found through a k-d tree (kiddo).
 
 use crate::grid::Grid3;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
-use std::collections::HashMap;
-
-/// Points bucketed in a uniform grid of cubic cells, for radius queries.
-pub struct PointIndex<'a> {
-    points: &'a [Point3<f64>],
-    cell: f64,
-    buckets: HashMap<[i64; 3], Vec<u32>>,
-}
-
-impl<'a> PointIndex<'a> {
-    /// Buckets `points` in cells of edge `cell` (world units, > 0).
-    pub fn new(points: &'a [Point3<f64>], cell: f64) -> Self {
-        let mut buckets: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-        for (i, p) in points.iter().enumerate() {
-            buckets.entry(key(p, cell)).or_default().push(i as u32);
-        }
-        PointIndex {
-            points,
-            cell,
-            buckets,
-        }
-    }
-
-    /// Calls `f(index, distance)` for every point within `radius` of `p`.
-    pub fn for_each_within(&self, p: &Point3<f64>, radius: f64, mut f: impl FnMut(u32, f64)) {
-        let reach = (radius / self.cell).ceil() as i64;
-        let c = key(p, self.cell);
-        for dz in -reach..=reach {
-            for dy in -reach..=reach {
-                for dx in -reach..=reach {
-                    let Some(bucket) = self.buckets.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
-                        continue;
-                    };
-                    for &i in bucket {
-                        let d = (self.points[i as usize] - p).norm();
-                        if d <= radius {
-                            f(i, d);
-                        }
-                    }
-                }
-            }
-        }
-    }
-}
-
-fn key(p: &Point3<f64>, cell: f64) -> [i64; 3] {
-    [p.x, p.y, p.z].map(|v| (v / cell).floor() as i64)
-}
+use std::num::NonZero;
 
 /// A vector field on the nodes of a grid: `None` where it was not extended.
 pub type NodeField = Vec<Option<Vector3<f64>>>;
@@ -71,12 +25,15 @@ pub enum ExtendFrom {
     Node,
 }
 
+/// Samples each node takes its value from (the nearest ones).
+const NEAREST: usize = 8;
+
 /// Extends `values` (one per point of `points`) to every node with |φ| ≤ `band` (world units).
-/// Each node queries around its foot point or itself (`from`) and takes the mean of the values
-/// of the samples there, weighted by exp(−(d² − d_min²)/2σ²) with σ = `radius`/2, so the
-/// nearest samples dominate; the search radius (`radius` world units at first) doubles until it
-/// finds a sample or passes `band` + `radius`. With [`ExtendFrom::FootPoint`] and samples on
-/// the zero level set, this is the paper's extension constant along normals.
+/// Each node queries around its foot point or itself (`from`), finds its [`NEAREST`] samples
+/// (k-d tree) and takes the mean of their values weighted by exp(−(d² − d_min²)/2σ²), σ =
+/// `radius`/2, so the nearest samples dominate and farther ones only smooth ties. A node whose
+/// nearest sample is farther than `band` + `radius` gets `None`. With [`ExtendFrom::FootPoint`]
+/// and samples on the zero level set, this is the paper's extension constant along normals.
 pub fn extend_to_band(
     phi: &Grid3,
     points: &[Point3<f64>],
@@ -85,17 +42,25 @@ pub fn extend_to_band(
     radius: f64,
     from: ExtendFrom,
 ) -> NodeField {
-    let index = PointIndex::new(points, radius);
+    let coords: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
+    let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
+        return vec![None; phi.data().len()];
+    };
     let two_sigma2 = 2.0 * (0.5 * radius).powi(2);
+    let reach2 = (band + radius).powi(2);
+    let k = NonZero::new(NEAREST.min(points.len()).max(1)).expect("k ≥ 1");
     (0..phi.data().len())
         .into_par_iter()
         .map(|n| {
+            if points.is_empty() {
+                return None;
+            }
             let v = phi.data()[n] as f64;
             if v.abs() > band {
                 return None;
             }
-            let [i, j, k] = phi.coords(n);
-            let y = phi.world(i, j, k);
+            let [i, j, kk] = phi.coords(n);
+            let y = phi.world(i, j, kk);
             let query = match from {
                 ExtendFrom::Node => y,
                 ExtendFrom::FootPoint => {
@@ -108,24 +73,21 @@ pub fn extend_to_band(
                     }
                 }
             };
-            let mut r = radius;
-            loop {
-                let mut found: Vec<(u32, f64)> = Vec::new();
-                index.for_each_within(&query, r, |s, d| found.push((s, d)));
-                if let Some(dmin) = found.iter().map(|f| f.1).reduce(f64::min) {
-                    let (mut sum, mut weight) = (Vector3::zeros(), 0.0);
-                    for (s, d) in found {
-                        let w = (-(d * d - dmin * dmin) / two_sigma2).exp();
-                        sum += values[s as usize] * w;
-                        weight += w;
-                    }
-                    return Some(sum / weight);
-                }
-                if r > band + radius {
-                    return None;
-                }
-                r *= 2.0;
+            let found = tree
+                .query(&[query.x, query.y, query.z])
+                .nearest_n::<SquaredEuclidean<f64>>(k)
+                .execute();
+            let d2min = found.first()?.distance;
+            if d2min > reach2 {
+                return None;
             }
+            let (mut sum, mut weight) = (Vector3::zeros(), 0.0);
+            for f in found {
+                let w = (-(f.distance - d2min) / two_sigma2).exp();
+                sum += values[f.item as usize] * w;
+                weight += w;
+            }
+            Some(sum / weight)
         })
         .collect()
 }

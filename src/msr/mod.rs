@@ -7,6 +7,7 @@
 //! reconstruction by the level set.
 
 pub mod archive;
+pub mod decompose;
 pub mod extend;
 pub mod project;
 pub mod reconstruct;
