@@ -46,6 +46,13 @@ fn sample_msr() -> (Msr, Vec<Vec<Point3<f64>>>) {
         samples: xs[levels].clone(),
         details,
         normal_details,
+        normals: (0..=levels)
+            .map(|i| {
+                (0..s)
+                    .map(|k| (xs[i][k] - Point3::origin()).normalize())
+                    .collect()
+            })
+            .collect(),
         times: vec![0.0, 0.5, 1.25, 2.0],
         phi,
         params: MsrParams {
@@ -121,6 +128,7 @@ print(json.dumps(out))
     assert_eq!(shape("details"), serde_json::json!([3, 6, 3]));
     assert_eq!(shape("normal_details"), serde_json::json!([3, 6]));
     assert_eq!(shape("times"), serde_json::json!([4]));
+    assert_eq!(shape("normals"), serde_json::json!([4, 6, 3]));
     assert_eq!(shape("extra_face"), serde_json::json!([2]));
     assert_eq!(shape("extra_bary"), serde_json::json!([2, 3]));
     assert_eq!(shape("phi"), serde_json::json!([2, 3, 4]));

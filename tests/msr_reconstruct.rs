@@ -6,7 +6,9 @@ use nalgebra::{Point3, Vector3};
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use vesselmsr::mesh::primitives::icosphere;
-use vesselmsr::msr::reconstruct::{advect_back, AdvectOptions, Departure};
+use vesselmsr::msr::reconstruct::{
+    advect_back, rebuild_from_tangent_planes, AdvectOptions, Departure,
+};
 use vesselmsr::msr::sample::sample_for_spacing;
 
 const R: f64 = 15.0;
@@ -88,4 +90,35 @@ fn tangential_details_leave_the_surface() {
         println!("tangential details, {departure:?}: max radial error {err:.3} h");
         assert!(err < 0.06, "{departure:?}: {err}");
     }
+}
+
+#[test]
+fn tangent_planes_of_the_previous_samples_rebuild_the_surface() {
+    let (phi, c, samples) = sphere();
+    // S_{i−1}: the sphere of radius R − a − b n_z, sampled at the displaced points with the
+    // normals of that surface of revolution, r(θ) = R − a − b cos θ.
+    let (a, b) = (2.0, 1.5);
+    let mut previous = Vec::new();
+    let mut normals = Vec::new();
+    let mut details = Vec::new();
+    for p in &samples {
+        let n = (p - c).normalize();
+        let r = R - a - b * n.z;
+        previous.push(c + n * r);
+        // Gradient of |x − c| − r(n_z): n − (dr/dn_z)·∇n_z = n + b (e_z − n_z n)/|x − c|.
+        let g = n + (Vector3::z() - n * n.z) * (b / r);
+        normals.push(g.normalize());
+        details.push(p - (c + n * r));
+    }
+    let back = rebuild_from_tangent_planes(
+        &phi,
+        &previous,
+        &normals,
+        &details,
+        &AdvectOptions::default(),
+    )
+    .unwrap();
+    let err = radial_error(&back, c, |n| R - a - b * n.z);
+    println!("tangent planes: max radial error {err:.3} h");
+    assert!(err < 0.05, "{err}");
 }

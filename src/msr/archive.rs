@@ -5,7 +5,8 @@
 //! `format` (text "vesselmsr-msr"), `format_version` (int64, [`FORMAT_VERSION`]), `params`
 //! (text: the [`MsrParams`] as JSON), `faces` (uint32 F×3), `num_vertices` (int64),
 //! `extra_face` (int64 S−V), `extra_bary` (float64 (S−V)×3), `samples` (float64 S×3: X_N),
-//! `details` (float64 N×S×3: W_1..W_N), `normal_details` (float64 N×S: w_1..w_N), `times`
+//! `details` (float64 N×S×3: W_1..W_N), `normal_details` (float64 N×S: w_1..w_N), `normals`
+//! (float64 (N+1)×S×3: the unit outward normals n_0..n_N of S_i at X_i), `times`
 //! (float64 N+1), `phi` (float32 nz×ny×nx, x fastest: φ_T), `phi_origin` (float64 3) and
 //! `phi_voxel` (float64). Coordinates are in the units of the input mesh.
 //!
@@ -84,6 +85,15 @@ pub fn write_msr(path: &Path, msr: &Msr) -> Result<()> {
             NpyArray::new(
                 &[n, s],
                 NpyData::F64(msr.normal_details.iter().flatten().copied().collect()),
+            ),
+        ),
+        (
+            "normals",
+            NpyArray::new(
+                &[msr.normals.len(), s, 3],
+                NpyData::F64(flat3(
+                    &mut msr.normals.iter().flatten().map(|w| (*w).into()),
+                )),
             ),
         ),
         (
@@ -182,6 +192,12 @@ pub fn read_msr(path: &Path) -> Result<Msr> {
         &[Some(levels), Some(s)],
     )
     .map_err(&bad)?;
+    let normals = f64_array(
+        take("normals")?,
+        "normals",
+        &[Some(levels + 1), Some(s), Some(3)],
+    )
+    .map_err(&bad)?;
     let origin = f64_array(take("phi_origin")?, "phi_origin", &[Some(3)]).map_err(&bad)?;
     let voxel = f64_array(take("phi_voxel")?, "phi_voxel", &[])
         .map_err(&bad)?
@@ -227,6 +243,9 @@ pub fn read_msr(path: &Path) -> Result<Msr> {
             .collect(),
         normal_details: (0..levels)
             .map(|i| normal.1[s * i..s * (i + 1)].to_vec())
+            .collect(),
+        normals: (0..=levels)
+            .map(|i| v3(&normals.1[3 * s * i..3 * s * (i + 1)]))
             .collect(),
         times: times.1,
         phi,

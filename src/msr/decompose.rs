@@ -144,6 +144,7 @@ pub fn decompose(
     }
     let mut flow = Flow::new(opts.velocity, dt, opts.flow.clone())?;
     let mut x = samples.points.clone();
+    let mut normals = vec![outward_normals(&phi, &x)];
     let mut details = Vec::with_capacity(opts.levels);
     let mut normal_details = Vec::with_capacity(opts.levels);
     let mut reports = Vec::with_capacity(opts.levels);
@@ -161,15 +162,9 @@ pub fn decompose(
         let unconverged = projected.iter().filter(|p| !p.converged).count();
         let next: Vec<Point3<f64>> = projected.iter().map(|p| p.point).collect();
         let w: Vec<Vector3<f64>> = next.iter().zip(&x).map(|(a, b)| a - b).collect();
-        let wn: Vec<f64> = next
-            .par_iter()
-            .zip(&w)
-            .map(|(p, d)| {
-                phi.gradient_tricubic(p)
-                    .and_then(|g| g.try_normalize(1e-12))
-                    .map_or(0.0, |n| d.dot(&n))
-            })
-            .collect();
+        let n_i = outward_normals(&phi, &next);
+        let wn: Vec<f64> = n_i.iter().zip(&w).map(|(n, d)| d.dot(n)).collect();
+        normals.push(n_i);
         let mean_abs = wn.iter().map(|v| v.abs()).sum::<f64>() / wn.len().max(1) as f64;
         let sparse =
             wn.iter().filter(|v| v.abs() < 0.1 * h).count() as f64 / wn.len().max(1) as f64;
@@ -199,6 +194,7 @@ pub fn decompose(
         samples: x,
         details,
         normal_details,
+        normals,
         times,
         phi,
         params: MsrParams {
@@ -217,4 +213,17 @@ pub fn decompose(
         reports,
         level_sets,
     })
+}
+
+/// Unit outward normals ∇φ/|∇φ| (tricubic) at `points`; zero where the gradient vanishes or the
+/// point is off the grid.
+fn outward_normals(phi: &Grid3, points: &[Point3<f64>]) -> Vec<Vector3<f64>> {
+    points
+        .par_iter()
+        .map(|p| {
+            phi.gradient_tricubic(p)
+                .and_then(|g| g.try_normalize(1e-12))
+                .unwrap_or_else(Vector3::zeros)
+        })
+        .collect()
 }

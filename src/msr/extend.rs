@@ -42,19 +42,36 @@ pub fn extend_to_band(
     radius: f64,
     from: ExtendFrom,
 ) -> NodeField {
+    weighted_nearest(phi, points, band, radius, from, |s, _| values[s])
+}
+
+/// The weighted mean over the nearest samples of `value(sample, query point)`, at every node
+/// with |φ| ≤ `band` (the machinery of [`extend_to_band`], for any value that can be averaged).
+pub fn weighted_nearest<T>(
+    phi: &Grid3,
+    points: &[Point3<f64>],
+    band: f64,
+    radius: f64,
+    from: ExtendFrom,
+    value: impl Fn(usize, &Point3<f64>) -> T + Sync,
+) -> Vec<Option<T>>
+where
+    T: Copy + Send + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>,
+{
+    let none = || (0..phi.data().len()).map(|_| None).collect();
+    if points.is_empty() {
+        return none();
+    }
     let coords: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
     let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
-        return vec![None; phi.data().len()];
+        return none();
     };
     let two_sigma2 = 2.0 * (0.5 * radius).powi(2);
     let reach2 = (band + radius).powi(2);
-    let k = NonZero::new(NEAREST.min(points.len()).max(1)).expect("k ≥ 1");
+    let k = NonZero::new(NEAREST.min(points.len())).expect("k ≥ 1");
     (0..phi.data().len())
         .into_par_iter()
         .map(|n| {
-            if points.is_empty() {
-                return None;
-            }
             let v = phi.data()[n] as f64;
             if v.abs() > band {
                 return None;
@@ -81,13 +98,18 @@ pub fn extend_to_band(
             if d2min > reach2 {
                 return None;
             }
-            let (mut sum, mut weight) = (Vector3::zeros(), 0.0);
+            let mut sum: Option<T> = None;
+            let mut weight = 0.0;
             for f in found {
                 let w = (-(f.distance - d2min) / two_sigma2).exp();
-                sum += values[f.item as usize] * w;
+                let term = value(f.item as usize, &y) * w;
+                sum = Some(match sum {
+                    Some(acc) => acc + term,
+                    None => term,
+                });
                 weight += w;
             }
-            Some(sum / weight)
+            sum.map(|acc| acc * (1.0 / weight))
         })
         .collect()
 }

@@ -8,7 +8,7 @@
 //! own positions on S_{i−1}, X_{i−1} = X_i − W_i, looked up around x ([`Departure`]). Nodes outside the band keep φ_i; the result is redistanced by fast
 //! sweeping. (The reconstruction by vertices needs none of this: [`super::Msr::mesh_at`].)
 
-use super::extend::{extend_to_band, ExtendFrom, NodeField};
+use super::extend::{extend_to_band, weighted_nearest, ExtendFrom, NodeField};
 use crate::grid::Grid3;
 use crate::levelset::redistance::{redistance, RedistanceOptions};
 use crate::Result;
@@ -105,6 +105,50 @@ pub fn advect_back(
         })
         .collect();
     out.data_mut().copy_from_slice(&values);
+    redistance(&mut out, &RedistanceOptions::default())?;
+    Ok(out)
+}
+
+/// φ_{i−1} from φ_i and the samples of S_{i−1} (X_{i−1}, with their outward normals n_{i−1} and
+/// the details W_i that took them to S_i): near the samples, each node takes the weighted mean,
+/// over its nearest samples, of its signed distance to their tangent planes n·(x − X) (the
+/// semi-Lagrangian step φ_i(y) of [`advect_back`] carried with the rotation of the sample's frame
+/// from n_i to n_{i−1}, which to first order is exactly that distance); elsewhere the side comes
+/// from φ_i, at least `band_margin` voxels from the surface; then fast sweeping.
+/// Where S_i has closed a fold of S_{i−1} (a sulcus smoothed over), this keeps the fold's
+/// walls apart, which the plain translation of [`advect_back`] cannot.
+pub fn rebuild_from_tangent_planes(
+    phi: &Grid3,
+    previous: &[Point3<f64>],
+    normals: &[Vector3<f64>],
+    details: &[Vector3<f64>],
+    opts: &AdvectOptions,
+) -> Result<Grid3> {
+    let h = phi.voxel();
+    let radius = opts.extension_radius * h;
+    let largest = details.iter().map(|w| w.norm()).fold(0.0, f64::max);
+    let near = opts.band_margin * h;
+    let band = largest + near;
+    // Per node: signed distance to the planes, squared distance to the samples, and how far
+    // those samples moved to S_i.
+    let field = weighted_nearest(phi, previous, band, radius, ExtendFrom::Node, |s, x| {
+        let d = x - previous[s];
+        Vector3::new(normals[s].dot(&d), d.norm_squared(), details[s].norm())
+    });
+    let mut out = phi.clone();
+    for (v, f) in out.data_mut().iter_mut().zip(&field) {
+        match f {
+            // Tangent planes only where φ_i cannot be trusted for the side — within the
+            // distance the nearby samples moved (counted up to 2h), plus a margin — and not
+            // beyond: far from
+            // the samples a plane's side is no guide to inside and outside (the nearest sample
+            // of a concave region can be across the shape).
+            Some(f) if f.y <= (near + f.z.min(2.0 * h)).powi(2) => *v = f.x as f32,
+            // Beyond: the side φ_i gives, at least `near` from the surface.
+            _ if (v.abs() as f64) < near => *v = (near as f32).copysign(*v),
+            _ => {}
+        }
+    }
     redistance(&mut out, &RedistanceOptions::default())?;
     Ok(out)
 }

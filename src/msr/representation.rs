@@ -47,6 +47,9 @@ pub struct Msr {
     pub details: Vec<Vec<Vector3<f64>>>,
     /// `normal_details[i − 1]` = w_i = W_i·n_i (n_i the outward normal of φ(t_i) at X_i).
     pub normal_details: Vec<Vec<f64>>,
+    /// `normals[i]` = n_i, the outward unit normal of S_i at each sample X_i (i = 0..=N), from
+    /// ∇φ(t_i): what the level-set reconstruction orients each sample's tangent plane by.
+    pub normals: Vec<Vec<Vector3<f64>>>,
     /// t_0 = 0 < t_1 < … < t_N = T.
     pub times: Vec<f64>,
     /// φ(t_N), the coarsest shape.
