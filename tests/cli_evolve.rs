@@ -9,13 +9,6 @@ use common::*;
 use serde_json::Value;
 use std::path::Path;
 
-fn aorta() -> String {
-    data_dir()
-        .join("aorta_abdominal_open_ends.stl")
-        .to_string_lossy()
-        .into_owned()
-}
-
 /// `evolve --json` of the aorta at 64 cells along its longest side with `extra` flags.
 fn run(out: &Path, extra: &[&str]) -> Value {
     let a = aorta();
@@ -148,19 +141,6 @@ fn evolve_prints_a_text_summary() {
     assert!(text.contains("inpaint (c = 0.2) to t = 4 in"), "{text}");
     assert!(text.contains("watertight"), "{text}");
     assert!(out.exists());
-}
-
-fn assert_fails(args: &[&str], word: &str, output: &Path) {
-    let run = vesselmsr(args);
-    let stderr = String::from_utf8_lossy(&run.stderr);
-    assert_eq!(run.status.code(), Some(2), "{args:?}: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
-    assert!(
-        stderr.contains(word),
-        "{args:?}: message lacks {word:?}: {stderr}"
-    );
-    assert!(!output.exists(), "{args:?} left an output");
-    println!("{args:?} -> {}", stderr.trim_end());
 }
 
 #[test]

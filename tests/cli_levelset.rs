@@ -7,13 +7,6 @@ mod common;
 use common::*;
 use std::path::Path;
 
-fn aorta() -> String {
-    data_dir()
-        .join("aorta_abdominal_open_ends.stl")
-        .to_string_lossy()
-        .into_owned()
-}
-
 #[test]
 fn remesh_json_reports_grid_output_and_timings() {
     let tmp = tempfile::tempdir().unwrap();
@@ -47,19 +40,6 @@ fn remesh_json_reports_grid_output_and_timings() {
     let info = vesselmsr_json(&["info", "--json", out.to_str().unwrap()]);
     assert_eq!(info["watertight"], true);
     assert_eq!(info["faces"], report["output"]["faces"]);
-}
-
-fn assert_fails(args: &[&str], word: &str, output: &Path) {
-    let run = vesselmsr(args);
-    let stderr = String::from_utf8_lossy(&run.stderr);
-    assert_eq!(run.status.code(), Some(2), "{args:?}: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
-    assert!(
-        stderr.contains(word),
-        "{args:?}: message lacks {word:?}: {stderr}"
-    );
-    assert!(!output.exists(), "{args:?} left an output");
-    println!("{args:?} -> {}", stderr.trim_end());
 }
 
 #[test]

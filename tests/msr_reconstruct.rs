@@ -45,6 +45,29 @@ fn radial_error(phi: &Grid3, c: Point3<f64>, expected: impl Fn(&Vector3<f64>) ->
         .fold(0.0, f64::max)
 }
 
+/// Advects `phi` back along `details` with both departure rules and checks the radial error
+/// against `expected` (radius per direction).
+fn advect_both_ways(
+    phi: &Grid3,
+    c: Point3<f64>,
+    samples: &[Point3<f64>],
+    details: &[Vector3<f64>],
+    expected: impl Fn(&Vector3<f64>) -> f64 + Copy,
+    limit: f64,
+    what: &str,
+) {
+    for departure in [Departure::FootPoint, Departure::Arrival] {
+        let opts = AdvectOptions {
+            departure,
+            ..Default::default()
+        };
+        let back = advect_back(phi, samples, details, &opts).unwrap();
+        let err = radial_error(&back, c, expected);
+        println!("{what}, {departure:?}: max radial error {err:.3} h");
+        assert!(err < limit, "{what}, {departure:?}: {err}");
+    }
+}
+
 #[test]
 fn normal_details_move_the_surface_back() {
     let (phi, c, samples) = sphere();
@@ -57,16 +80,16 @@ fn normal_details_move_the_surface_back() {
             n * (a + b * n.z)
         })
         .collect();
-    for departure in [Departure::FootPoint, Departure::Arrival] {
-        let opts = AdvectOptions {
-            departure,
-            ..Default::default()
-        };
-        let back = advect_back(&phi, &samples, &details, &opts).unwrap();
-        let err = radial_error(&back, c, |n| R - a - b * n.z);
-        println!("normal details, {departure:?}: max radial error {err:.3} h");
-        assert!(err < 0.05, "{departure:?}: {err}");
-    }
+    let expected = |n: &Vector3<f64>| R - a - b * n.z;
+    advect_both_ways(
+        &phi,
+        c,
+        &samples,
+        &details,
+        expected,
+        0.05,
+        "normal details",
+    );
 }
 
 #[test]
@@ -79,17 +102,16 @@ fn tangential_details_leave_the_surface() {
             Vector3::z().cross(&n) * 1.0
         })
         .collect();
-    for departure in [Departure::FootPoint, Departure::Arrival] {
-        let opts = AdvectOptions {
-            departure,
-            ..Default::default()
-        };
-        let back = advect_back(&phi, &samples, &details, &opts).unwrap();
-        let err = radial_error(&back, c, |_| R);
-        // Sliding a sample by |W| along the sphere leaves it at radius √(R² + |W|²) ≈ R + 0.033h.
-        println!("tangential details, {departure:?}: max radial error {err:.3} h");
-        assert!(err < 0.06, "{departure:?}: {err}");
-    }
+    // Sliding a sample by |W| along the sphere leaves it at radius √(R² + |W|²) ≈ R + 0.033h.
+    advect_both_ways(
+        &phi,
+        c,
+        &samples,
+        &details,
+        |_| R,
+        0.06,
+        "tangential details",
+    );
 }
 
 #[test]

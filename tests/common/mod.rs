@@ -84,6 +84,29 @@ pub fn vesselmsr(args: &[&str]) -> Output {
         .expect("the vesselmsr binary runs")
 }
 
+/// The shipped open-ended aorta (data/), as a command-line argument.
+pub fn aorta() -> String {
+    data_dir()
+        .join("aorta_abdominal_open_ends.stl")
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// Runs the CLI with `args` and checks it failed as bad input must: exit status 2, one line on
+/// stderr containing `word`, and no `output` left behind.
+pub fn assert_fails(args: &[&str], word: &str, output: &Path) {
+    let run = vesselmsr(args);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{args:?}: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{args:?}: {stderr}");
+    assert!(
+        stderr.contains(word),
+        "{args:?}: message lacks {word:?}: {stderr}"
+    );
+    assert!(!output.exists(), "{args:?} left an output");
+    println!("{args:?} -> {}", stderr.trim_end());
+}
+
 /// Runs the binary, asserts success and parses its stdout as JSON.
 pub fn vesselmsr_json(args: &[&str]) -> Value {
     let out = vesselmsr(args);
