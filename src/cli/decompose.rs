@@ -131,7 +131,7 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
     };
     // The level count is checked before any work (the rest of the schedule needs h).
     if args.levels == 0 {
-        level_schedule(&opts, 1.0)?;
+        level_schedule(&opts, 1.0).map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
     }
     let grid_opts = args.grid.options()?;
     let Voxelized {
