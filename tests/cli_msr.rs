@@ -392,6 +392,35 @@ fn reconstruct_refuses_bad_archives_and_writes_nothing() {
         });
         run(&nan, &[], "NaN");
     }
+    // A φ_T edited to have no inside: the vertices do not need it, the level set refuses.
+    let members = read_npz(&archive).unwrap();
+    let empty = tmp.path().join("empty_phi.npz");
+    let edited: Vec<(&str, NpyArray)> = members
+        .iter()
+        .map(|(n, m)| match (n.as_str(), &m.data) {
+            ("phi", NpyData::F32(v)) => (
+                n.as_str(),
+                NpyArray::new(&m.shape, NpyData::F32(vec![1.0; v.len()])),
+            ),
+            _ => (n.as_str(), m.clone()),
+        })
+        .collect();
+    write_npz(&empty, &edited).unwrap();
+    assert_fails(
+        &[
+            "reconstruct",
+            s(&empty),
+            "-o",
+            s(&out),
+            "--method",
+            "levelset",
+        ],
+        Some(&empty),
+        "is empty",
+        &[&out],
+    );
+    vesselmsr_json(&["--json", "reconstruct", s(&empty), "-o", s(&out)]);
+    std::fs::remove_file(&out).unwrap();
     // The good archive works, and an unknown output format is refused before reading it.
     let bad = tmp.path().join("out.xyz");
     assert_fails(

@@ -89,6 +89,11 @@ pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
         "{}: --level {k} is beyond the archive's {n} levels (0..={n})",
         args.archive.display()
     );
+    anyhow::ensure!(
+        !msr.faces.is_empty(),
+        "{}: the archive holds no triangles",
+        args.archive.display()
+    );
     let h = msr.phi.voxel();
     let t = Instant::now();
     let mut levels: Vec<LevelJson> = (k + 1..=n)
@@ -131,6 +136,12 @@ pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
                 let rebuilt = extract_surface(&phi, &ExtractOptions::default()).map_err(|e| {
                     anyhow::anyhow!("{}: level {}: {e}", args.archive.display(), i - 1)
                 })?;
+                anyhow::ensure!(
+                    !rebuilt.faces.is_empty(),
+                    "{}: the level-set reconstruction of level {} is empty",
+                    args.archive.display(),
+                    i - 1
+                );
                 let exact = msr.mesh_at(i - 1);
                 let d = surface_distance(&rebuilt, &exact, &SurfaceDistanceOptions::default());
                 let bvh = MeshBvh::new(&rebuilt);
