@@ -170,6 +170,7 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
         );
         bar.set_length((args.levels * steps) as u64);
     }
+    bar.set_message(format!("decomposing ({velocity})"));
     let t = Instant::now();
     let levels = args.levels;
     let d = decompose(&mesh, phi, &opts, |level, _| {
@@ -275,7 +276,10 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
         out.samples,
         out.vertices
     );
-    println!("level  t            mean |w|/h  |w|<0.1h  volume          area");
+    println!(
+        "{:>5}  {:<11}  {:>10}  {:>8}  {:<14}  area",
+        "level", "t", "mean |w|/h", "|w|<0.1h", "volume"
+    );
     for l in &out.levels {
         println!(
             "{:>5}  {:<11.5}  {:>10.4}  {:>7.1}%  {:<14.6}  {:.6}",
