@@ -12,14 +12,15 @@
 
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
 use super::{print_json, Context};
-use crate::grid::spec::{format_bytes, grid_memory_bytes};
+use crate::grid::spec::{format_bytes, grid_memory_bytes, GridOptions};
+use crate::grid::{Grid3, GridSpec};
 use crate::io::{write_mesh, MeshFormat};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::mesh::info::{mesh_info, MeshInfo};
 use crate::motion::volume::{measure_area, measure_volume};
 use crate::motion::{evolve, step_count, FlowOptions, StepReport, Velocity};
 use indicatif::ProgressStyle;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Default time step, in voxels² (h²).
@@ -94,6 +95,69 @@ struct EvolveOutput {
     timings: Timings,
 }
 
+/// A motion a grid must have room for: its velocity, final time and step (world length²).
+pub(super) struct MotionRoom {
+    pub velocity: Velocity,
+    pub time: f64,
+    pub step: f64,
+}
+
+/// Pads `phi` (and updates `spec` to match) so that, beyond the padding `grid_opts` already gave
+/// it, the grid has room for the motion: the growth C·T, the diffusion's reach 4√(2·step) for the
+/// curvature motions, and 2√T for those that can move outward (`vpmcf`, `inpaint`), plus two
+/// voxels. New nodes get φ = the flow's redistance band (outside). Refuses, naming `mesh_path`
+/// and `what` (e.g. "evolving"), a padded grid whose `GRIDS_HELD` grids exceed the memory limit.
+pub(super) fn pad_for_motion(
+    mesh_path: &Path,
+    spec: &mut GridSpec,
+    phi: Grid3,
+    grid_opts: &GridOptions,
+    motion: &MotionRoom,
+    flow: &FlowOptions,
+    what: &str,
+) -> anyhow::Result<Grid3> {
+    let h = spec.voxel();
+    let velocity = motion.velocity;
+    let growth = velocity.speed().map_or(0.0, |c| c.max(0.0) * motion.time);
+    let outward = if velocity.preserves_volume() {
+        2.0 * motion.time.sqrt()
+    } else {
+        0.0
+    };
+    let reach = if velocity.has_curvature() {
+        4.0 * (2.0 * motion.step).sqrt()
+    } else {
+        0.0
+    };
+    let needed = ((growth + outward + reach) / h + 2.0).ceil();
+    let have = grid_opts.padding_voxels as f64;
+    let extra = (needed - have).max(0.0);
+    if extra <= 0.0 {
+        return Ok(phi);
+    }
+    let dims = spec.dims.map(|d| d as f64 + 2.0 * extra);
+    let bytes = grid_memory_bytes(spec.dims, GRIDS_HELD) as f64 * (dims[0] * dims[1] * dims[2])
+        / spec.node_count() as f64;
+    if bytes > grid_opts.max_memory_bytes as f64 {
+        anyhow::bail!(
+            "{}: {what} needs a grid of {}×{}×{} nodes (padded by {extra} voxels for the \
+             motion), about {} for {GRIDS_HELD} grids, more than the {} limit: use a \
+             coarser --voxel, a shorter --time, or raise --max-memory",
+            mesh_path.display(),
+            dims[0],
+            dims[1],
+            dims[2],
+            format_bytes(bytes as u64),
+            format_bytes(grid_opts.max_memory_bytes)
+        );
+    }
+    let fill = flow.band_width(&velocity, motion.step, h) as f32;
+    let phi = phi.pad(extra as usize, fill)?;
+    spec.dims = phi.dims();
+    spec.transform = *phi.transform();
+    Ok(phi)
+}
+
 pub fn run(ctx: &Context, args: &EvolveArgs) -> anyhow::Result<()> {
     MeshFormat::from_path(&args.output)?;
     let name = match args.velocity {
@@ -121,43 +185,19 @@ pub fn run(ctx: &Context, args: &EvolveArgs) -> anyhow::Result<()> {
     let step = args.time / steps as f64;
     let opts = FlowOptions::default();
 
-    // Room for the motion and the diffusion's reach, beyond the padding the grid already has.
-    let growth = velocity.speed().map_or(0.0, |c| c.max(0.0) * args.time);
-    let outward = if velocity.preserves_volume() {
-        2.0 * args.time.sqrt()
-    } else {
-        0.0
-    };
-    let reach = if velocity.has_curvature() {
-        4.0 * (2.0 * step).sqrt()
-    } else {
-        0.0
-    };
-    let needed = ((growth + outward + reach) / h + 2.0).ceil();
-    let have = grid_opts.padding_voxels as f64;
-    let extra = (needed - have).max(0.0);
-    if extra > 0.0 {
-        let dims = spec.dims.map(|d| d as f64 + 2.0 * extra);
-        let bytes = grid_memory_bytes(spec.dims, GRIDS_HELD) as f64 * (dims[0] * dims[1] * dims[2])
-            / spec.node_count() as f64;
-        if bytes > grid_opts.max_memory_bytes as f64 {
-            anyhow::bail!(
-                "{}: evolving needs a grid of {}×{}×{} nodes (padded by {extra} voxels for the \
-                 motion), about {} for {GRIDS_HELD} grids, more than the {} limit: use a \
-                 coarser --voxel, a shorter --time, or raise --max-memory",
-                args.mesh.display(),
-                dims[0],
-                dims[1],
-                dims[2],
-                format_bytes(bytes as u64),
-                format_bytes(grid_opts.max_memory_bytes)
-            );
-        }
-        let fill = opts.band_width(&velocity, step, h) as f32;
-        phi = phi.pad(extra as usize, fill)?;
-        spec.dims = phi.dims();
-        spec.transform = *phi.transform();
-    }
+    phi = pad_for_motion(
+        &args.mesh,
+        &mut spec,
+        phi,
+        &grid_opts,
+        &MotionRoom {
+            velocity,
+            time: args.time,
+            step,
+        },
+        &opts,
+        "evolving",
+    )?;
     let initial = Initial {
         volume: measure_volume(&phi),
         area: measure_area(&phi),

@@ -4,10 +4,12 @@
 
 mod cap;
 mod compare;
+mod decompose;
 mod evolve;
 mod grid_args;
 mod info;
 mod progress;
+mod reconstruct;
 mod remesh;
 mod voxelize;
 
@@ -54,6 +56,12 @@ pub enum Command {
     /// Evolve a surface by a level-set motion (mean curvature, volume-preserving, constant speed,
     /// inpainting) solved by threshold dynamics; writes the evolved surface.
     Evolve(evolve::EvolveArgs),
+    /// Multiscale representation of a surface (levels of a curvature motion and the details
+    /// between them) written as one .npz archive; optionally every level as PLY and figures.
+    Decompose(decompose::DecomposeArgs),
+    /// Rebuild a level of a multiscale representation archive, exactly from its tracked vertices
+    /// or by advecting its coarsest level set back along the details.
+    Reconstruct(reconstruct::ReconstructArgs),
 }
 
 /// Global settings every command sees.
@@ -98,6 +106,8 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Voxelize(args) => voxelize::run(&ctx, &args),
         Command::Remesh(args) => remesh::run(&ctx, &args),
         Command::Evolve(args) => evolve::run(&ctx, &args),
+        Command::Decompose(args) => decompose::run(&ctx, &args),
+        Command::Reconstruct(args) => reconstruct::run(&ctx, &args),
     }
 }
 

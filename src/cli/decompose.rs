@@ -1,0 +1,346 @@
+//! `vesselmsr decompose MESH -o MSR.npz [--levels N] [--time T] [--velocity …] [--c C] [--dt DT]
+//! [grid flags] [--levels-dir DIR] [--figures DIR]`: the multiscale representation of a mesh
+//! (paper Algorithm 1, [`crate::msr::decompose`]) written as one `.npz` archive.
+//!
+//! The mesh is voxelized, the grid padded for the motion (as `evolve` does), and the levels
+//! t_i = i·T/N computed by the chosen motion (default `vpmcf`, the paper's Figure 1). Optional
+//! outputs for looking at the result: `--levels-dir` writes every scale S_0..S_N as PLY (S_k,
+//! k ≥ 1, with the per-vertex scalar `detail` = w_k, for ParaView or MeshLab), `--figures` the
+//! detail histograms per level (the paper's Figure 2) and a strip of S_0..S_N coloured by w_k
+//! (its Figure 1). Everything is computed before anything is written, so a failure leaves no
+//! output.
+
+use super::evolve::{pad_for_motion, MotionRoom, VelocityName};
+use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::{print_json, Context};
+use crate::io::write_mesh_with_scalars;
+use crate::motion::Velocity;
+use crate::msr::archive::write_msr;
+use crate::msr::decompose::{decompose, level_schedule, DecomposeOptions};
+use crate::report::{
+    histogram_grid, render_strip, write_png, Camera, HistogramOptions, Panel, RgbImage,
+    StripOptions,
+};
+use crate::TriMesh;
+use anyhow::Context as _;
+use clap::ValueEnum;
+use indicatif::ProgressStyle;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, clap::Args)]
+pub struct DecomposeArgs {
+    /// Input mesh (.stl, .obj or .ply).
+    pub mesh: PathBuf,
+    /// Output archive (.npz; numpy's `np.load` opens it).
+    #[arg(short, long, value_name = "MSR.npz")]
+    pub output: PathBuf,
+    /// Number of levels N.
+    #[arg(long, value_name = "N", default_value_t = 5)]
+    pub levels: usize,
+    /// Total time T, in the mesh's length² (default N·4h², h the voxel size: each level smooths
+    /// away features of about 2h more radius).
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub time: Option<f64>,
+    /// The motion between levels.
+    #[arg(long, value_enum, default_value_t = VelocityName::Vpmcf)]
+    pub velocity: VelocityName,
+    /// Speed of `expand` and `inpaint`, in the mesh's length per unit time (default 0).
+    #[arg(long, value_name = "C", allow_negative_numbers = true)]
+    pub c: Option<f64>,
+    /// Largest time step, in the mesh's length² (default 2h²); each level takes a whole number
+    /// of equal steps.
+    #[arg(long, value_name = "DT", allow_negative_numbers = true)]
+    pub dt: Option<f64>,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Write each scale S_0..S_N as DIR/level_K.ply (S_K, K ≥ 1, with the per-vertex scalar
+    /// `detail` = w_K).
+    #[arg(long, value_name = "DIR")]
+    pub levels_dir: Option<PathBuf>,
+    /// Write DIR/details_histograms.png (w_i in units of h, one panel per level) and
+    /// DIR/levels_strip.png (S_0..S_N coloured by w_i).
+    #[arg(long, value_name = "DIR")]
+    pub figures: Option<PathBuf>,
+}
+
+#[derive(serde::Serialize)]
+struct LevelJson {
+    level: usize,
+    /// t_i, length².
+    time: f64,
+    samples: usize,
+    /// Mean |w_i|, in units of h.
+    mean_abs_detail: f64,
+    /// Fraction of |w_i| < 0.1h.
+    sparse_fraction: f64,
+    /// Samples whose projection did not converge.
+    unconverged: usize,
+    volume: f64,
+    area: f64,
+}
+
+#[derive(serde::Serialize)]
+struct Timings {
+    read: f64,
+    voxelize: f64,
+    decompose: f64,
+    write: f64,
+}
+
+#[derive(serde::Serialize)]
+struct DecomposeOutput {
+    voxel: f64,
+    velocity: &'static str,
+    c: Option<f64>,
+    time: f64,
+    dt: f64,
+    steps_per_level: usize,
+    grid: GridJson,
+    vertices: usize,
+    samples: usize,
+    levels: Vec<LevelJson>,
+    output: String,
+    files: Vec<String>,
+    timings: Timings,
+}
+
+/// The name of a velocity on the command line.
+pub(super) fn velocity_name(v: VelocityName) -> String {
+    v.to_possible_value()
+        .map_or_else(String::new, |p| p.get_name().to_string())
+}
+
+pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
+    let is_npz = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npz"));
+    anyhow::ensure!(
+        is_npz,
+        "{}: the archive must be a .npz file",
+        args.output.display()
+    );
+    let velocity = Velocity::from_name(&velocity_name(args.velocity), args.c)?;
+    let mut opts = DecomposeOptions {
+        levels: args.levels,
+        time: args.time,
+        velocity,
+        dt: args.dt,
+        ..Default::default()
+    };
+    // The level count is checked before any work (the rest of the schedule needs h).
+    if args.levels == 0 {
+        level_schedule(&opts, 1.0).map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
+    }
+    let grid_opts = args.grid.options()?;
+    let Voxelized {
+        mesh,
+        mut spec,
+        phi,
+        read_s,
+        voxelize_s,
+        bar,
+        ..
+    } = load_and_voxelize(ctx, &args.mesh, &args.grid)?;
+    let h = spec.voxel();
+    let (time, dt, steps) =
+        level_schedule(&opts, h).map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
+    opts.time = Some(time);
+    let phi = pad_for_motion(
+        &args.mesh,
+        &mut spec,
+        phi,
+        &grid_opts,
+        &MotionRoom {
+            velocity,
+            time,
+            step: dt,
+        },
+        &opts.flow,
+        "decomposing",
+    )?;
+
+    if !bar.is_hidden() {
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{spinner} {msg} [{bar:30}] {pos}/{len} steps ({elapsed})",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar.set_length((args.levels * steps) as u64);
+    }
+    bar.set_message(format!("decomposing ({velocity})"));
+    let t = Instant::now();
+    let levels = args.levels;
+    let d = decompose(&mesh, phi, &opts, |level, _| {
+        bar.set_message(format!("decomposing ({velocity}), level {level}/{levels}"));
+        bar.inc(1);
+    })
+    .map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
+    let decompose_s = t.elapsed().as_secs_f64();
+    let msr = &d.msr;
+
+    // Everything that can fail is computed before the first write.
+    bar.set_message("preparing the outputs");
+    let scales: Vec<TriMesh> = if args.levels_dir.is_some() || args.figures.is_some() {
+        (0..=msr.levels()).map(|k| msr.mesh_at(k)).collect()
+    } else {
+        Vec::new()
+    };
+    let vertex_details: Vec<&[f64]> = msr
+        .normal_details
+        .iter()
+        .map(|w| &w[..msr.num_vertices])
+        .collect();
+    let figures = match &args.figures {
+        Some(_) => Some(draw_figures(msr, &scales, &vertex_details, h)?),
+        None => None,
+    };
+
+    let t = Instant::now();
+    bar.set_message("writing");
+    let mut files = Vec::new();
+    write_msr(&args.output, msr)?;
+    if let Some(dir) = &args.levels_dir {
+        std::fs::create_dir_all(dir).with_context(|| format!("{}", dir.display()))?;
+        for (k, scale) in scales.iter().enumerate() {
+            let path = dir.join(format!("level_{k}.ply"));
+            let detail: Vec<f32>;
+            let scalars: Vec<(&str, &[f32])> = if k == 0 {
+                Vec::new()
+            } else {
+                detail = vertex_details[k - 1].iter().map(|&w| w as f32).collect();
+                vec![("detail", &detail[..])]
+            };
+            write_mesh_with_scalars(&path, scale, &scalars)?;
+            files.push(path.display().to_string());
+        }
+    }
+    if let (Some(dir), Some((histograms, strip))) = (&args.figures, &figures) {
+        std::fs::create_dir_all(dir).with_context(|| format!("{}", dir.display()))?;
+        for (name, image) in [
+            ("details_histograms.png", histograms),
+            ("levels_strip.png", strip),
+        ] {
+            let path = dir.join(name);
+            write_png(&path, image)?;
+            files.push(path.display().to_string());
+        }
+    }
+    let write_s = t.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+
+    let out = DecomposeOutput {
+        voxel: h,
+        velocity: velocity.name(),
+        c: velocity.speed(),
+        time,
+        dt,
+        steps_per_level: steps,
+        grid: GridJson::of(&spec),
+        vertices: msr.num_vertices,
+        samples: msr.samples.len(),
+        levels: d
+            .reports
+            .iter()
+            .map(|r| LevelJson {
+                level: r.level,
+                time: r.time,
+                samples: r.samples,
+                mean_abs_detail: r.mean_abs_detail / h,
+                sparse_fraction: r.sparse_fraction,
+                unconverged: r.unconverged,
+                volume: r.volume,
+                area: r.area,
+            })
+            .collect(),
+        output: args.output.display().to_string(),
+        files,
+        timings: Timings {
+            read: read_s,
+            voxelize: voxelize_s,
+            decompose: decompose_s,
+            write: write_s,
+        },
+    };
+    if ctx.json {
+        return print_json(&out);
+    }
+    let [nx, ny, nz] = spec.dims;
+    println!(
+        "{}: {levels} levels of {velocity} to T = {time} ({steps} steps of {dt} per level) on a \
+         {nx}×{ny}×{nz} grid, voxel h = {h} (file units); {} samples ({} vertices); decompose \
+         {decompose_s:.2} s",
+        args.output.display(),
+        out.samples,
+        out.vertices
+    );
+    println!(
+        "{:>5}  {:<11}  {:>10}  {:>8}  {:<14}  area",
+        "level", "t", "mean |w|/h", "|w|<0.1h", "volume"
+    );
+    for l in &out.levels {
+        println!(
+            "{:>5}  {:<11.5}  {:>10.4}  {:>7.1}%  {:<14.6}  {:.6}",
+            l.level,
+            l.time,
+            l.mean_abs_detail,
+            100.0 * l.sparse_fraction,
+            l.volume,
+            l.area
+        );
+    }
+    for f in &out.files {
+        println!("wrote {f}");
+    }
+    Ok(())
+}
+
+/// The detail histograms per level and the strip of S_0..S_N coloured by w_k / h (one camera,
+/// along the shortest side of S_0).
+fn draw_figures(
+    msr: &crate::msr::Msr,
+    scales: &[TriMesh],
+    vertex_details: &[&[f64]],
+    h: f64,
+) -> anyhow::Result<(RgbImage, RgbImage)> {
+    let levels: Vec<(String, Vec<f64>)> = msr
+        .normal_details
+        .iter()
+        .enumerate()
+        .map(|(i, w)| (format!("level {}", i + 1), w.clone()))
+        .collect();
+    let histograms = histogram_grid(
+        &levels,
+        &HistogramOptions {
+            unit: h,
+            columns: levels.len().min(5),
+            ..Default::default()
+        },
+    )?
+    .image;
+    let in_h: Vec<Vec<f64>> = vertex_details
+        .iter()
+        .map(|w| w.iter().map(|x| x / h).collect())
+        .collect();
+    let titles: Vec<String> = (0..scales.len()).map(|k| format!("S_{k}")).collect();
+    let panels: Vec<Panel> = scales
+        .iter()
+        .enumerate()
+        .map(|(k, mesh)| Panel {
+            mesh,
+            scalars: k.checked_sub(1).map(|i| &in_h[i][..]),
+            title: &titles[k],
+        })
+        .collect();
+    let mut strip_opts = StripOptions {
+        colorbar: Some("detail w / h".to_string()),
+        ..Default::default()
+    };
+    strip_opts.panel.camera = scales
+        .first()
+        .map_or_else(Camera::default, Camera::along_shortest_axis);
+    let strip = render_strip(&panels, &strip_opts)?;
+    Ok((histograms, strip))
+}
