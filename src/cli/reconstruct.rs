@@ -3,14 +3,16 @@
 //! Definition 2.1(4), IMST).
 //!
 //! `vertices` (exact, the paper's Remark 2.2(4)): the original triangles on the samples
-//! X_K = X_N − Σ_{i>K} W_i. `levelset`: from the archive's φ_T, φ is advected back one level at a
-//! time along the details ([`crate::msr::reconstruct::advect_back`] with the samples X_i and
-//! W_i) down to level K, and its zero level set extracted by marching cubes; each level's
+//! X_K = X_N − Σ_{i>K} W_i. `levelset`: from the archive's φ_T, φ is carried back one level at a
+//! time along the details down to level K
+//! ([`crate::msr::reconstruct::rebuild_from_tangent_planes`]: the semi-Lagrangian step with the
+//! samples' frames rotated, from X_{i−1} = X_i − W_i and their normals), and its zero level set
+//! extracted by marching cubes; each level's
 //! reconstruction S̃_{i−1} is compared with the exact S_{i−1} (the vertex reconstruction) by the
 //! Hausdorff distance, reported in units of h, and the samples X_{i−1} (on S_{i−1}) by their
 //! distance to S̃_{i−1} (the Hausdorff distance also counts the chords of long original edges
-//! across a curved S_{i−1}, which are not errors of the reconstruction). A missing, damaged or foreign archive, or a K
-//! beyond its levels, is refused before anything is written.
+//! across a curved S_{i−1}, which are not errors of the reconstruction). A missing, damaged or
+//! foreign archive, or a K beyond its levels, is refused before anything is written.
 
 use super::{print_json, progress, Context};
 use crate::bvh::MeshBvh;
@@ -19,7 +21,7 @@ use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::mesh::distance::{surface_distance, SurfaceDistanceOptions};
 use crate::mesh::info::{mesh_info, MeshInfo};
 use crate::msr::archive::read_msr;
-use crate::msr::reconstruct::{advect_back, AdvectOptions};
+use crate::msr::reconstruct::{rebuild_from_tangent_planes, AdvectOptions};
 use indicatif::ProgressStyle;
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -122,13 +124,22 @@ pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
                 );
                 bar.set_length((n - k) as u64);
             }
+            let inside = msr.phi.data().iter().any(|&v| v < 0.0);
+            let outside = msr.phi.data().iter().any(|&v| v > 0.0);
+            anyhow::ensure!(
+                inside && outside,
+                "{}: φ_T is empty (no node {} its surface): nothing to rebuild the level set from",
+                args.archive.display(),
+                if inside { "outside" } else { "inside" }
+            );
             let mut phi = msr.phi.clone();
             let mut surface = None;
             for i in (k + 1..=n).rev() {
                 bar.set_message(format!("level {i} → {}", i - 1));
-                phi = advect_back(
+                phi = rebuild_from_tangent_planes(
                     &phi,
-                    &msr.samples_at(i),
+                    &msr.samples_at(i - 1),
+                    &msr.normals[i - 1],
                     &msr.details[i - 1],
                     &AdvectOptions::default(),
                 )
