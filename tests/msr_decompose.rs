@@ -75,6 +75,11 @@ fn ellipsoid_decomposes_and_reconstructs() {
         assert_eq!(r.unconverged, 0, "level {}", r.level);
         assert!(r.mean_abs_detail < previous_mean, "details shrink");
         previous_mean = r.mean_abs_detail;
+        assert!(
+            r.mean_abs_curvature < previous_curvature,
+            "levels get smoother"
+        );
+        previous_curvature = r.mean_abs_curvature;
     }
     // Level-set reconstruction of every level from the next.
     for i in 1..=msr.levels() {

@@ -78,6 +78,8 @@ struct LevelJson {
     unconverged: usize,
     volume: f64,
     area: f64,
+    /// Mean |κ| at the samples, in units of 1/h (decreasing as the levels get smoother).
+    mean_abs_curvature: f64,
 }
 
 #[derive(serde::Serialize)]
@@ -253,6 +255,7 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
                 unconverged: r.unconverged,
                 volume: r.volume,
                 area: r.area,
+                mean_abs_curvature: r.mean_abs_curvature * h,
             })
             .collect(),
         output: args.output.display().to_string(),
@@ -277,18 +280,19 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
         out.vertices
     );
     println!(
-        "{:>5}  {:<11}  {:>10}  {:>8}  {:<14}  area",
-        "level", "t", "mean |w|/h", "|w|<0.1h", "volume"
+        "{:>5}  {:<11}  {:>10}  {:>8}  {:<14}  {:<14}  mean |κ|·h",
+        "level", "t", "mean |w|/h", "|w|<0.1h", "volume", "area"
     );
     for l in &out.levels {
         println!(
-            "{:>5}  {:<11.5}  {:>10.4}  {:>7.1}%  {:<14.6}  {:.6}",
+            "{:>5}  {:<11.5}  {:>10.4}  {:>7.1}%  {:<14.6}  {:<14.6}  {:.4}",
             l.level,
             l.time,
             l.mean_abs_detail,
             100.0 * l.sparse_fraction,
             l.volume,
-            l.area
+            l.area,
+            l.mean_abs_curvature
         );
     }
     for f in &out.files {
