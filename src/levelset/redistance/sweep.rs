@@ -32,6 +32,16 @@ const FROZEN: u32 = 0x8000_0000;
 const TILE: usize = 8;
 /// An empty span of a row.
 const EMPTY_SPAN: u64 = u32::MAX as u64;
+/// Most disjoint spans kept per row, ascending (a row through a closed surface holds a band
+/// piece on each side; more pieces are joined across their smallest gaps).
+const SPANS: usize = 2;
+/// Most runs of nodes one row visit walks: the spans of the (at most 5) rows it reads.
+const RUNS: usize = 5 * SPANS;
+/// Most stretches of changed nodes one row visit reports (more are joined to the last).
+const STRETCHES: usize = 8;
+/// Changed nodes more than this many nodes apart start a new stretch: a run that crosses a
+/// gap between band pieces must not record the gap as holding values.
+const GAP: usize = 4;
 
 /// The 8 sweep orders (ascending along x, y, z?), each differing from the next in one axis.
 const ORDERS: [[bool; 3]; 8] = [
@@ -68,7 +78,8 @@ struct Sweeper<'a> {
     visited: Vec<AtomicU32>,
     /// Per row: the stamp of its last change.
     changed: Vec<AtomicU32>,
-    /// Per row: lo | hi << 32, the nodes from lo to hi hold a value (lo > hi: none).
+    /// Per row, [`SPANS`] slots (row r: r·SPANS..): disjoint, ascending spans lo | hi << 32
+    /// (lo > hi: empty, after the others); every node that holds a value lies in one of them.
     span: Vec<AtomicU64>,
 }
 
@@ -103,7 +114,9 @@ pub(super) fn sweep_distance(
     let slots = if closest { 6 * rows } else { rows };
     let visited = filled(slots, 0);
     let changed = filled(rows, 0);
-    let span: Vec<AtomicU64> = (0..rows).map(|_| AtomicU64::new(EMPTY_SPAN)).collect();
+    let span: Vec<AtomicU64> = (0..SPANS * rows)
+        .map(|_| AtomicU64::new(EMPTY_SPAN))
+        .collect();
     for (s, (&node, &d)) in seeds.node.iter().zip(&seeds.dist).enumerate() {
         let stored = if closest {
             ids[node].store(s as u32, Relaxed);
@@ -114,8 +127,7 @@ pub(super) fn sweep_distance(
         val[node].store(stored.to_bits() | FROZEN, Relaxed);
         let (r, i) = (node / nx, (node % nx) as u64);
         changed[r].store(1, Relaxed);
-        let old = span[r].load(Relaxed);
-        span[r].store(widen(old, i, i), Relaxed);
+        add_span(&span[SPANS * r..SPANS * (r + 1)], i, i);
     }
     let point = if closest {
         let mut point: Vec<[f32; 4]> = seeds
@@ -152,13 +164,59 @@ pub(super) fn sweep_distance(
     (sweeps, converged)
 }
 
-/// The span `packed` (lo | hi << 32) grown to cover lo..=hi.
-fn widen(packed: u64, lo: u64, hi: u64) -> u64 {
-    let (a, b) = (packed & 0xffff_ffff, packed >> 32);
-    if a > b {
-        lo | hi << 32
-    } else {
-        a.min(lo) | b.max(hi) << 32
+/// Adds lo..=hi to the spans of a row (its [`SPANS`] slots): spans that overlap or touch are
+/// joined, and when more than [`SPANS`] remain, the two with the smallest gap between them.
+fn add_span(slots: &[AtomicU64], lo: u64, hi: u64) {
+    let mut cur = [(0u64, 0u64); SPANS + 1];
+    let mut n = 0;
+    let mut placed = false;
+    for slot in slots {
+        let p = slot.load(Relaxed);
+        let (a, b) = (p & 0xffff_ffff, p >> 32);
+        if a > b {
+            break;
+        }
+        if a <= lo && hi <= b {
+            // Already covered: nothing to store.
+            return;
+        }
+        if !placed && lo < a {
+            cur[n] = (lo, hi);
+            n += 1;
+            placed = true;
+        }
+        cur[n] = (a, b);
+        n += 1;
+    }
+    if !placed {
+        cur[n] = (lo, hi);
+        n += 1;
+    }
+    let mut m = 0;
+    for t in 1..n {
+        if cur[t].0 <= cur[m].1 + 1 {
+            cur[m].1 = cur[m].1.max(cur[t].1);
+        } else {
+            m += 1;
+            cur[m] = cur[t];
+        }
+    }
+    let mut n = m + 1;
+    if n > SPANS {
+        let g = (0..n - 1)
+            .min_by_key(|&t| cur[t + 1].0 - cur[t].1)
+            .unwrap_or(0);
+        cur[g].1 = cur[g + 1].1;
+        cur.copy_within(g + 2..n, g + 1);
+        n -= 1;
+    }
+    for (t, slot) in slots.iter().enumerate() {
+        let packed = if t < n {
+            cur[t].0 | cur[t].1 << 32
+        } else {
+            EMPTY_SPAN
+        };
+        slot.store(packed, Relaxed);
     }
 }
 
@@ -224,11 +282,18 @@ impl Sweeper<'_> {
         );
         let y_up = y_up.map(|jj| jj + ny * k);
         let z_up = z_up.map(|kk| j + ny * kk);
-        let mut span = EMPTY_SPAN;
+        // The runs of nodes that can change: the spans of the rows read, widened by one.
+        let mut runs = [(0usize, 0usize); RUNS];
+        let mut count = 0;
         let mut take_span = |q: usize| {
-            let s = self.span[q].load(Relaxed);
-            if s & 0xffff_ffff <= s >> 32 {
-                span = widen(span, s & 0xffff_ffff, s >> 32);
+            for slot in &self.span[SPANS * q..SPANS * (q + 1)] {
+                let s = slot.load(Relaxed);
+                let (a, b) = ((s & 0xffff_ffff) as usize, (s >> 32) as usize);
+                if a > b {
+                    break;
+                }
+                runs[count] = (a.saturating_sub(1), (b + 1).min(nx - 1));
+                count += 1;
             }
         };
         let changed_at = |q: usize| self.changed[q].load(Relaxed);
@@ -284,22 +349,17 @@ impl Sweeper<'_> {
                 }
             }
         }
-        let (lo, hi) = (span & 0xffff_ffff, span >> 32);
-        if lo > hi {
+        if count == 0 {
             return false;
         }
-        // Nodes that can change: the span of the rows read, widened by one.
-        let (lo, hi) = (
-            lo.saturating_sub(1) as usize,
-            ((hi + 1) as usize).min(nx - 1),
-        );
-        let (changed, new_lo, new_hi) = match self.scheme {
-            RedistanceScheme::Godunov => self.godunov_row(j, k, order[0], lo, hi),
-            RedistanceScheme::ClosestPoint => self.closest_point_row(j, k, order, lo, hi),
+        let runs = merge_runs(&mut runs[..count]);
+        let (changed, out, outs) = match self.scheme {
+            RedistanceScheme::Godunov => self.godunov_row(j, k, order[0], runs),
+            RedistanceScheme::ClosestPoint => self.closest_point_row(j, k, order, runs),
         };
-        if new_lo <= new_hi {
-            let old = self.span[r].load(Relaxed);
-            self.span[r].store(widen(old, new_lo as u64, new_hi as u64), Relaxed);
+        let slots = &self.span[SPANS * r..SPANS * (r + 1)];
+        for &(lo, hi) in &out[..outs] {
+            add_span(slots, lo as u64, hi as u64);
         }
         if changed {
             self.changed[r].store(stamp, Relaxed);
@@ -307,50 +367,89 @@ impl Sweeper<'_> {
         changed
     }
 
-    /// The nodes of a row visited in sweep direction: from the first of lo..=hi on, past the
-    /// last one for as long as the previous node changed (the sweep carries values along x).
-    /// Returns the span of the nodes for which `visit` said true.
+    /// The nodes of a row visited in sweep direction, run by run (`runs`: disjoint, ascending):
+    /// from the first node of each run not visited yet, past its last one for as long as the
+    /// previous node changed (the sweep carries values along x). `visit` is told whether the
+    /// node starts a new stretch (its upwind x neighbour was not just visited). Returns the
+    /// stretches of the nodes for which `visit` said true (more than [`GAP`] nodes apart:
+    /// separate stretches, at most [`STRETCHES`]) and their count.
     #[inline(always)]
     fn walk(
         nx: usize,
         ascending: bool,
-        lo: usize,
-        hi: usize,
-        mut visit: impl FnMut(usize) -> bool,
-    ) -> (usize, usize) {
-        let (mut new_lo, mut new_hi) = (usize::MAX, 0);
-        let (mut i, step, stop) = if ascending {
-            (lo as isize, 1, hi as isize)
-        } else {
-            (hi as isize, -1, lo as isize)
-        };
-        loop {
-            let changed = visit(i as usize);
-            if changed {
-                new_lo = new_lo.min(i as usize);
-                new_hi = new_hi.max(i as usize);
+        runs: &[(usize, usize)],
+        mut visit: impl FnMut(usize, bool) -> bool,
+    ) -> ([(usize, usize); STRETCHES], usize) {
+        let mut out = [(0usize, 0usize); STRETCHES];
+        let mut outs = 0;
+        // The stretch being grown (lo > hi: none yet).
+        let (mut cur_lo, mut cur_hi) = (usize::MAX, 0usize);
+        let step: isize = if ascending { 1 } else { -1 };
+        // The next node in sweep order not visited yet.
+        let mut next: isize = if ascending { 0 } else { nx as isize - 1 };
+        for t in 0..runs.len() {
+            let (lo, hi) = runs[if ascending { t } else { runs.len() - 1 - t }];
+            let (start, stop) = if ascending {
+                ((lo as isize).max(next), hi as isize)
+            } else {
+                ((hi as isize).min(next), lo as isize)
+            };
+            if (start - stop) * step > 0 {
+                continue;
             }
-            if (i == stop || (i - stop) * step > 0) && !changed {
-                break;
+            let mut i = start;
+            let mut first = true;
+            loop {
+                let changed = visit(i as usize, first);
+                first = false;
+                if changed {
+                    let u = i as usize;
+                    if cur_lo > cur_hi {
+                        (cur_lo, cur_hi) = (u, u);
+                    } else if u + GAP >= cur_lo && u <= cur_hi + GAP {
+                        (cur_lo, cur_hi) = (cur_lo.min(u), cur_hi.max(u));
+                    } else {
+                        if outs == STRETCHES {
+                            let last = &mut out[STRETCHES - 1];
+                            *last = (last.0.min(cur_lo), last.1.max(cur_hi));
+                        } else {
+                            out[outs] = (cur_lo, cur_hi);
+                            outs += 1;
+                        }
+                        (cur_lo, cur_hi) = (u, u);
+                    }
+                }
+                if (i - stop) * step >= 0 && !changed {
+                    break;
+                }
+                i += step;
+                if i < 0 || i >= nx as isize {
+                    break;
+                }
             }
-            i += step;
-            if i < 0 || i >= nx as isize {
-                break;
+            next = i + step;
+        }
+        if cur_lo <= cur_hi {
+            if outs == STRETCHES {
+                let last = &mut out[STRETCHES - 1];
+                *last = (last.0.min(cur_lo), last.1.max(cur_hi));
+            } else {
+                out[outs] = (cur_lo, cur_hi);
+                outs += 1;
             }
         }
-        (new_lo, new_hi)
+        (out, outs)
     }
 
-    /// One Godunov pass along row (j, k) over lo..=hi (and on while values change): returns
-    /// (changed beyond tolerance, span of the nodes that got a value below the start).
+    /// One Godunov pass along row (j, k) over `runs` (and on while values change): returns
+    /// (changed beyond tolerance, spans of the nodes that got a value below the start, count).
     fn godunov_row(
         &self,
         j: usize,
         k: usize,
         ascending: bool,
-        lo: usize,
-        hi: usize,
-    ) -> (bool, usize, usize) {
+        runs: &[(usize, usize)],
+    ) -> (bool, [(usize, usize); STRETCHES], usize) {
         let [nx, ny, nz] = self.dims;
         let base = nx * (j + ny * k);
         let rows = [
@@ -366,7 +465,7 @@ impl Sweeper<'_> {
             x.min(y)
         };
         let mut changed = false;
-        let (new_lo, new_hi) = Self::walk(nx, ascending, lo, hi, |i| {
+        let (out, outs) = Self::walk(nx, ascending, runs, |i, _| {
             let idx = base + i;
             let bits = self.val[idx].load(Relaxed);
             if bits & FROZEN != 0 {
@@ -404,22 +503,21 @@ impl Sweeper<'_> {
             }
             false
         });
-        (changed, new_lo, new_hi)
+        (changed, out, outs)
     }
 
-    /// One closest-point pass along row (j, k) over lo..=hi (and on while values change): each
+    /// One closest-point pass along row (j, k) over `runs` (and on while values change): each
     /// node that is not frozen takes, among its own interface node and those carried by its 7
     /// upwind neighbours in this sweep order (±1 or 0 along each axis, toward where the sweep
-    /// comes from), the one whose crossing point is nearest. Returns (changed, span of changed
-    /// nodes).
+    /// comes from), the one whose crossing point is nearest. Returns (changed, spans of the
+    /// changed nodes, count).
     fn closest_point_row(
         &self,
         j: usize,
         k: usize,
         order: [bool; 3],
-        lo: usize,
-        hi: usize,
-    ) -> (bool, usize, usize) {
+        runs: &[(usize, usize)],
+    ) -> (bool, [(usize, usize); STRETCHES], usize) {
         let [nx, ny, nz] = self.dims;
         let base = nx * (j + ny * k);
         // Upwind steps as flat-index offsets; 0 where the neighbour is off the grid, which
@@ -444,9 +542,12 @@ impl Sweeper<'_> {
         let (ids, val, point) = (&self.ids[..], &self.val[..], &self.point[..]);
         let limit2 = self.limit2;
         // The id the previous node (upwind along x) ended with, carried in a register;
-        // u32::MAX before the first visited node.
+        // u32::MAX at the start of each stretch.
         let mut prev = u32::MAX;
-        let (new_lo, new_hi) = Self::walk(nx, order[0], lo, hi, |i| {
+        let (out, outs) = Self::walk(nx, order[0], runs, |i, fresh| {
+            if fresh {
+                prev = u32::MAX;
+            }
             let idx = base + i;
             let bits = val[idx].load(Relaxed);
             let own = ids[idx].load(Relaxed);
@@ -514,7 +615,7 @@ impl Sweeper<'_> {
             prev = own;
             false
         });
-        (new_lo <= new_hi, new_lo, new_hi)
+        (outs > 0, out, outs)
     }
 
     /// φ ← sign(φ)·min(distance·h, band), in parallel over rows. The closest-point scheme
@@ -548,6 +649,28 @@ impl Sweeper<'_> {
                 }
             });
     }
+}
+
+/// Sorts `runs` by start and joins those that overlap or touch, in place: returns the disjoint,
+/// ascending runs.
+fn merge_runs(runs: &mut [(usize, usize)]) -> &[(usize, usize)] {
+    for t in 1..runs.len() {
+        let mut u = t;
+        while u > 0 && runs[u - 1].0 > runs[u].0 {
+            runs.swap(u - 1, u);
+            u -= 1;
+        }
+    }
+    let mut m = 0;
+    for t in 1..runs.len() {
+        if runs[t].0 <= runs[m].1 + 1 {
+            runs[m].1 = runs[m].1.max(runs[t].1);
+        } else {
+            m += 1;
+            runs[m] = runs[t];
+        }
+    }
+    &runs[..m + 1]
 }
 
 /// The Godunov upwind solution of |∇u| = 1 (unit spacing) from the smallest neighbour values
