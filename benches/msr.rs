@@ -1,0 +1,156 @@
+//! MSR benchmark (issue 5): on the real cortex (../shared/data/real) at the default voxel size,
+//! our `decompose` (5 levels, default options: vpmcf) followed by the 5 tangent-plane rebuilds
+//! φ_{i−1} from φ_i (`rebuild_from_tangent_planes`), against `reference/msr.py` — the same
+//! algorithm in numpy/scipy (oracle.mbo_step threshold dynamics, Newton projection with cubic
+//! `map_coordinates`, cKDTree tangent planes, `distance_transform_edt` redistancing) — on the
+//! same φ_0, samples X_0, time step and levels, in one run. Printed: both times, the ratio
+//! reference seconds / ours (goal ≥ 10×), and the per-level mean |w_i| of both side by side.
+//!
+//! Run: `cargo bench --bench msr` (the reference side needs reference/.venv, which
+//! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON).
+
+mod common;
+
+use common::{root, time_median, write_points, Reference};
+use std::ffi::OsString;
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
+use vesselmsr::grid::{grid_for_mesh, GridOptions};
+use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
+use vesselmsr::msr::decompose::{decompose, DecomposeOptions, Decomposition};
+use vesselmsr::msr::reconstruct::{rebuild_from_tangent_planes, AdvectOptions};
+
+const LEVELS: usize = 5;
+
+/// Our decomposition (keeping the level sets) and the rebuild of every φ_{i−1} from φ_i.
+fn ours(mesh: &vesselmsr::TriMesh, phi0: &vesselmsr::grid::Grid3) -> Decomposition {
+    let opts = DecomposeOptions {
+        levels: LEVELS,
+        keep_level_sets: true,
+        ..Default::default()
+    };
+    let d = decompose(mesh, phi0.clone(), &opts, |_, _| {}).expect("decompose runs");
+    for i in 1..=LEVELS {
+        std::hint::black_box(
+            rebuild_from_tangent_planes(
+                &d.level_sets[i],
+                &d.msr.samples_at(i - 1),
+                &d.msr.normals[i - 1],
+                &d.msr.details[i - 1],
+                &AdvectOptions::default(),
+            )
+            .expect("rebuild runs"),
+        );
+    }
+    d
+}
+
+/// `reference/msr.py` on φ_0 and X_0: its JSON answer.
+fn reference_msr(
+    python: &Path,
+    phi: &Path,
+    points: &Path,
+    dt: f64,
+    steps: usize,
+) -> Option<serde_json::Value> {
+    let out = Command::new(python)
+        .arg(root().join("reference/msr.py"))
+        .arg(phi)
+        .arg(points)
+        .arg(OsString::from(dt.to_string()))
+        .arg(steps.to_string())
+        .arg(LEVELS.to_string())
+        .output()
+        .ok()?;
+    if !out.status.success() {
+        eprintln!("reference failed: {}", String::from_utf8_lossy(&out.stderr));
+        return None;
+    }
+    serde_json::from_slice(&out.stdout).ok()
+}
+
+fn main() {
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"));
+    if !dir.is_dir() {
+        println!("skipping: ../shared/data/real not found");
+        return;
+    }
+    let path = dir.join("cortex_rh_pial_fsaverage5.stl");
+    let mesh = match vesselmsr::io::read_mesh(&path) {
+        Ok(m) => m,
+        Err(e) => {
+            println!("skipping: {e}");
+            return;
+        }
+    };
+    let spec = grid_for_mesh(&mesh, &GridOptions::default()).expect("a grid");
+    let h = spec.voxel();
+    let phi0 = voxelize(
+        &mesh,
+        spec.dims,
+        spec.transform,
+        &VoxelizeOptions::default(),
+    )
+    .expect("voxelize runs");
+    println!(
+        "vesselmsr MSR benchmark: cortex ({} vertices, {} faces), grid {:?}, h = {h:.4}, {LEVELS} levels vpmcf ({} rayon threads; the machine is shared: timings vary)",
+        mesh.num_vertices(),
+        mesh.num_faces(),
+        spec.dims,
+        rayon::current_num_threads()
+    );
+    let (t, d) = time_median(3, 3, Duration::ZERO, || ours(&mesh, &phi0));
+    let ours_s = t.as_secs_f64();
+    let m = &d.msr;
+    let steps = (m.params.time / LEVELS as f64 / m.params.dt).round() as usize;
+    println!(
+        "ours: decompose + {LEVELS} tangent-plane rebuilds {:.3} s (median of 3); {} samples, dt = {:.4} ({} steps per level)",
+        ours_s,
+        m.samples.len(),
+        m.params.dt,
+        steps
+    );
+    let Some(reference) = Reference::find_or_notice("reference timing") else {
+        return;
+    };
+    drop(reference);
+    let python = std::env::var_os("VESSELMSR_PYTHON")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root().join("reference/.venv/bin/python"));
+    let tmp = tempfile::tempdir().expect("a temporary folder");
+    let phi_path = tmp.path().join("phi0.npy");
+    vesselmsr::io::write_npy(&phi_path, &phi0).expect("write φ_0");
+    let points = write_points(tmp.path(), &m.samples_at(0)).expect("write X_0");
+    let Some(theirs) = reference_msr(&python, &phi_path, &points, m.params.dt, steps) else {
+        return;
+    };
+    let ref_s = theirs["seconds"].as_f64().unwrap_or(f64::NAN);
+    println!(
+        "reference (numpy/scipy): {:.3} s (decompose {:.3} s, rebuilds {:.3} s)",
+        ref_s,
+        theirs["decompose_seconds"].as_f64().unwrap_or(f64::NAN),
+        theirs["rebuild_seconds"].as_f64().unwrap_or(f64::NAN)
+    );
+    println!(
+        "ratio reference / ours: {:.1}× (goal ≥ 10×)",
+        ref_s / ours_s
+    );
+    println!("level | mean|w| ours (h) | reference (h) | unconverged ours / reference | reference rebuild mean |Δφ| (h)");
+    for i in 1..=LEVELS {
+        let r = &d.reports[i - 1];
+        println!(
+            "{i} | {:.4} | {:.4} | {} / {} | {:.3}",
+            r.mean_abs_detail / h,
+            theirs["mean_abs_detail"][i - 1]
+                .as_f64()
+                .unwrap_or(f64::NAN)
+                / h,
+            r.unconverged,
+            theirs["unconverged"][i - 1],
+            theirs["rebuild_mean_abs_error_h"][i - 1]
+                .as_f64()
+                .unwrap_or(f64::NAN)
+        );
+    }
+}
