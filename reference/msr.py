@@ -13,7 +13,7 @@ The algorithm follows Dong, Chien, Shen and Osher (level-set multiscale represen
   `scipy.ndimage.map_coordinates` (order 3); W_i = X_i − X_{i−1}, w_i = W_i·n_i with
   n_i = ∇φ_i/|∇φ_i| at X_i;
 * each φ_{i−1} is then rebuilt from φ_i and (X_{i−1}, n_{i−1}, W_i): near the samples a node
-  takes the Gaussian-weighted mean over its 8 nearest samples (`scipy.spatial.cKDTree`) of its
+  takes the Gaussian-weighted (σ = radius/2, relative to the nearest) mean over its 8 nearest samples (`scipy.spatial.cKDTree`) of its
   signed distance to their tangent planes; elsewhere the side of φ_i (at least `band_margin`
   voxels from the surface); then distance_transform_edt.
 
@@ -162,14 +162,17 @@ def rebuild_from_tangent_planes(
     dist, idx = tree.query(world, k=min(k, len(previous)))
     if dist.ndim == 1:
         dist, idx = dist[:, None], idx[:, None]
-    wgt = np.exp(-((dist / radius) ** 2))
+    # Gaussian weights of σ = radius/2, relative to the nearest sample (as vesselmsr's
+    # weighted_nearest); nodes farther than band + radius from every sample keep φ_i's side.
+    d2 = dist**2
+    wgt = np.exp(-(d2 - d2[:, :1]) / (2.0 * (0.5 * radius) ** 2))
     wsum = np.maximum(wgt.sum(axis=1), 1e-300)
     diff = world[:, None, :] - previous[idx]
     plane = np.einsum("nkc,nkc->nk", normals[idx], diff)
     value = (wgt * plane).sum(axis=1) / wsum
-    d2 = (wgt * dist**2).sum(axis=1) / wsum
+    d2w = (wgt * d2).sum(axis=1) / wsum
     m = (wgt * moved[idx]).sum(axis=1) / wsum
-    use = d2 <= (near + np.minimum(m, 2 * h)) ** 2
+    use = (d2w <= (near + np.minimum(m, 2 * h)) ** 2) & (d2[:, 0] <= (band + radius) ** 2)
     cur = phi[nodes]
     clamped = np.where(np.abs(cur) < near, np.copysign(near, cur), cur)
     out[nodes] = np.where(use, value, clamped)
