@@ -6,6 +6,14 @@
 //! same φ_0, samples X_0, time step and levels, in one run. Printed: both times, the ratio
 //! reference seconds / ours (goal ≥ 10×), and the per-level mean |w_i| of both side by side.
 //!
+//! Measured 2026-11-22 (2 cores, shared; load 0.3–1.9): grid 113×265×198, h = 0.678, 364 203
+//! samples, 2 steps of dt = 2h² per level. Ours 25.1 s (decompose 7.4 s, rebuilds 17.6 s),
+//! reference 98.2 s (decompose 24.1 s, rebuilds 74.1 s): ratio 3.9× — the 10× goal is not met,
+//! mostly because of the rebuilds (`weighted_nearest` over the band). Under load ≈ 3 ours took
+//! 47 s (ratio 2.1×). Mean |w_i| per level, ours / reference (h): 0.66/0.75, 0.65/0.72,
+//! 0.62/0.74, 0.69/0.61, 0.53/0.56 (the reference's φ is redistanced by the node-quantized
+//! `distance_transform_edt`, so its projection is noisier: 1–2 thousand samples unconverged).
+//!
 //! Run: `cargo bench --bench msr` (the reference side needs reference/.venv, which
 //! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON).
 
