@@ -1,0 +1,168 @@
+//! MSR benchmark (issue 5): on the real cortex (../shared/data/real) at the default voxel size,
+//! our `decompose` (5 levels, default options: vpmcf) followed by the 5 tangent-plane rebuilds
+//! φ_{i−1} from φ_i (`rebuild_from_tangent_planes`), against `reference/msr.py` — the same
+//! algorithm in numpy/scipy (oracle.mbo_step threshold dynamics, Newton projection with cubic
+//! `map_coordinates`, cKDTree tangent planes, `distance_transform_edt` redistancing) — on the
+//! same φ_0, samples X_0, time step and levels, in one run. Printed: both times, the ratio
+//! reference seconds / ours (goal ≥ 10×), and the per-level mean |w_i| of both side by side.
+//!
+//! Measured 2026-11-22 (2 cores, shared; load 0.3–1.9): grid 113×265×198, h = 0.678, 364 203
+//! samples, 2 steps of dt = 2h² per level. Ours 25.1 s (decompose 7.4 s, rebuilds 17.6 s),
+//! reference 98.2 s (decompose 24.1 s, rebuilds 74.1 s): ratio 3.9× — the 10× goal is not met,
+//! mostly because of the rebuilds (`weighted_nearest` over the band). Under load ≈ 3 ours took
+//! 47 s (ratio 2.1×). Mean |w_i| per level, ours / reference (h): 0.66/0.75, 0.65/0.72,
+//! 0.62/0.74, 0.69/0.61, 0.53/0.56 (the reference's φ is redistanced by the node-quantized
+//! `distance_transform_edt`, so its projection is noisier: 1–2 thousand samples unconverged).
+//!
+//! Run: `cargo bench --bench msr` (the reference side needs reference/.venv, which
+//! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON).
+
+mod common;
+
+use common::{root, time_median, write_points, Reference};
+use std::ffi::OsString;
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+use vesselmsr::grid::{grid_for_mesh, GridOptions};
+use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
+use vesselmsr::msr::decompose::{decompose, DecomposeOptions, Decomposition};
+use vesselmsr::msr::reconstruct::{rebuild_from_tangent_planes, AdvectOptions};
+
+const LEVELS: usize = 5;
+
+/// Our decomposition (keeping the level sets) and the rebuild of every φ_{i−1} from φ_i; with
+/// the seconds of each part.
+fn ours(mesh: &vesselmsr::TriMesh, phi0: &vesselmsr::grid::Grid3) -> (Decomposition, f64, f64) {
+    let start = Instant::now();
+    let opts = DecomposeOptions {
+        levels: LEVELS,
+        keep_level_sets: true,
+        ..Default::default()
+    };
+    let d = decompose(mesh, phi0.clone(), &opts, |_, _| {}).expect("decompose runs");
+    let decomposed = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    for i in 1..=LEVELS {
+        std::hint::black_box(
+            rebuild_from_tangent_planes(
+                &d.level_sets[i],
+                &d.msr.samples_at(i - 1),
+                &d.msr.normals[i - 1],
+                &d.msr.details[i - 1],
+                &AdvectOptions::default(),
+            )
+            .expect("rebuild runs"),
+        );
+    }
+    (d, decomposed, start.elapsed().as_secs_f64())
+}
+
+/// `reference/msr.py` on φ_0 and X_0: its JSON answer.
+fn reference_msr(
+    python: &Path,
+    phi: &Path,
+    points: &Path,
+    dt: f64,
+    steps: usize,
+) -> Option<serde_json::Value> {
+    let out = Command::new(python)
+        .arg(root().join("reference/msr.py"))
+        .arg(phi)
+        .arg(points)
+        .arg(OsString::from(dt.to_string()))
+        .arg(steps.to_string())
+        .arg(LEVELS.to_string())
+        .output()
+        .ok()?;
+    if !out.status.success() {
+        eprintln!("reference failed: {}", String::from_utf8_lossy(&out.stderr));
+        return None;
+    }
+    serde_json::from_slice(&out.stdout).ok()
+}
+
+fn main() {
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"));
+    if !dir.is_dir() {
+        println!("skipping: ../shared/data/real not found");
+        return;
+    }
+    let path = dir.join("cortex_rh_pial_fsaverage5.stl");
+    let mesh = match vesselmsr::io::read_mesh(&path) {
+        Ok(m) => m,
+        Err(e) => {
+            println!("skipping: {e}");
+            return;
+        }
+    };
+    let spec = grid_for_mesh(&mesh, &GridOptions::default()).expect("a grid");
+    let h = spec.voxel();
+    let phi0 = voxelize(
+        &mesh,
+        spec.dims,
+        spec.transform,
+        &VoxelizeOptions::default(),
+    )
+    .expect("voxelize runs");
+    println!(
+        "vesselmsr MSR benchmark: cortex ({} vertices, {} faces), grid {:?}, h = {h:.4}, {LEVELS} levels vpmcf ({} rayon threads; the machine is shared: timings vary)",
+        mesh.num_vertices(),
+        mesh.num_faces(),
+        spec.dims,
+        rayon::current_num_threads()
+    );
+    let (t, (d, dec_s, reb_s)) = time_median(3, 3, Duration::ZERO, || ours(&mesh, &phi0));
+    let ours_s = t.as_secs_f64();
+    let m = &d.msr;
+    let steps = (m.params.time / LEVELS as f64 / m.params.dt).round() as usize;
+    println!(
+        "ours: decompose + {LEVELS} tangent-plane rebuilds {:.3} s (median of 3; last run: decompose {dec_s:.3} s, rebuilds {reb_s:.3} s); {} samples, dt = {:.4} ({} steps per level)",
+        ours_s,
+        m.samples.len(),
+        m.params.dt,
+        steps
+    );
+    let Some(reference) = Reference::find_or_notice("reference timing") else {
+        return;
+    };
+    drop(reference);
+    let python = std::env::var_os("VESSELMSR_PYTHON")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root().join("reference/.venv/bin/python"));
+    let tmp = tempfile::tempdir().expect("a temporary folder");
+    let phi_path = tmp.path().join("phi0.npy");
+    vesselmsr::io::write_npy(&phi_path, &phi0).expect("write φ_0");
+    let points = write_points(tmp.path(), &m.samples_at(0)).expect("write X_0");
+    let Some(theirs) = reference_msr(&python, &phi_path, &points, m.params.dt, steps) else {
+        return;
+    };
+    let ref_s = theirs["seconds"].as_f64().unwrap_or(f64::NAN);
+    println!(
+        "reference (numpy/scipy): {:.3} s (decompose {:.3} s, rebuilds {:.3} s)",
+        ref_s,
+        theirs["decompose_seconds"].as_f64().unwrap_or(f64::NAN),
+        theirs["rebuild_seconds"].as_f64().unwrap_or(f64::NAN)
+    );
+    println!(
+        "ratio reference / ours: {:.1}× (goal ≥ 10×)",
+        ref_s / ours_s
+    );
+    println!("level | mean|w| ours (h) | reference (h) | unconverged ours / reference | reference rebuild mean |Δφ| (h)");
+    for i in 1..=LEVELS {
+        let r = &d.reports[i - 1];
+        println!(
+            "{i} | {:.4} | {:.4} | {} / {} | {:.3}",
+            r.mean_abs_detail / h,
+            theirs["mean_abs_detail"][i - 1]
+                .as_f64()
+                .unwrap_or(f64::NAN)
+                / h,
+            r.unconverged,
+            theirs["unconverged"][i - 1],
+            theirs["rebuild_mean_abs_error_h"][i - 1]
+                .as_f64()
+                .unwrap_or(f64::NAN)
+        );
+    }
+}
