@@ -42,16 +42,21 @@ pub fn extend_to_band(
     radius: f64,
     from: ExtendFrom,
 ) -> NodeField {
-    weighted_nearest(phi, points, band, radius, from, |s, _| values[s])
+    weighted_nearest(phi, points, band, radius, band + radius, from, |s, _| {
+        values[s]
+    })
 }
 
 /// The weighted mean over the nearest samples of `value(sample, query point)`, at every node
-/// with |φ| ≤ `band` (the machinery of [`extend_to_band`], for any value that can be averaged).
+/// with |φ| ≤ `band` whose nearest sample is within `reach` (world units) of its query point
+/// (the machinery of [`extend_to_band`], for any value that can be averaged). A small `reach`
+/// makes the queries of far nodes stop early.
 pub fn weighted_nearest<T>(
     phi: &Grid3,
     points: &[Point3<f64>],
     band: f64,
     radius: f64,
+    reach: f64,
     from: ExtendFrom,
     value: impl Fn(usize, &Point3<f64>) -> T + Sync,
 ) -> Vec<Option<T>>
@@ -67,8 +72,9 @@ where
         return none();
     };
     let two_sigma2 = 2.0 * (0.5 * radius).powi(2);
-    let reach2 = (band + radius).powi(2);
+    let reach2 = reach * reach;
     let k = NonZero::new(NEAREST.min(points.len())).expect("k ≥ 1");
+    let near = NearSamples::new(phi, points, reach);
     (0..phi.data().len())
         .into_par_iter()
         .map(|n| {
@@ -78,6 +84,9 @@ where
             }
             let [i, j, kk] = phi.coords(n);
             let y = phi.world(i, j, kk);
+            if from == ExtendFrom::Node && !near.may_have(&y) {
+                return None;
+            }
             let query = match from {
                 ExtendFrom::Node => y,
                 ExtendFrom::FootPoint => {
@@ -93,6 +102,7 @@ where
             let found = tree
                 .query(&[query.x, query.y, query.z])
                 .nearest_n::<SquaredEuclidean<f64>>(k)
+                .within(reach2)
                 .execute();
             let d2min = found.first()?.distance;
             if d2min > reach2 {
@@ -112,4 +122,60 @@ where
             sum.map(|acc| acc * (1.0 / weight))
         })
         .collect()
+}
+
+/// A coarse occupancy grid of the samples (cells of edge `reach`, dilated by one cell): a point
+/// whose cell is empty has no sample within `reach`, so its k-d tree query can be skipped.
+struct NearSamples {
+    origin: Point3<f64>,
+    cell: f64,
+    dims: [usize; 3],
+    occupied: Vec<bool>,
+}
+
+impl NearSamples {
+    fn new(phi: &Grid3, points: &[Point3<f64>], reach: f64) -> Self {
+        let origin = phi.transform().index_to_world(Vector3::zeros());
+        let extent = phi.dims().map(|d| (d.max(1) - 1) as f64 * phi.voxel());
+        let cell = reach.max(phi.voxel());
+        let dims = extent.map(|e| (e / cell).floor() as usize + 1);
+        let mut occupied = vec![false; dims[0] * dims[1] * dims[2]];
+        let key = |p: &Point3<f64>| -> Option<[usize; 3]> {
+            let mut k = [0usize; 3];
+            for a in 0..3 {
+                let c = ((p[a] - origin[a]) / cell).floor();
+                if !(c >= -1.0 && c <= dims[a] as f64) {
+                    return None;
+                }
+                k[a] = c.clamp(0.0, (dims[a] - 1) as f64) as usize;
+            }
+            Some(k)
+        };
+        for p in points {
+            let Some([x, y, z]) = key(p) else { continue };
+            for dz in z.saturating_sub(1)..=(z + 1).min(dims[2] - 1) {
+                for dy in y.saturating_sub(1)..=(y + 1).min(dims[1] - 1) {
+                    for dx in x.saturating_sub(1)..=(x + 1).min(dims[0] - 1) {
+                        occupied[dx + dims[0] * (dy + dims[1] * dz)] = true;
+                    }
+                }
+            }
+        }
+        NearSamples {
+            origin,
+            cell,
+            dims,
+            occupied,
+        }
+    }
+
+    /// Whether a sample may lie within `reach` of `p` (p inside the grid's box).
+    fn may_have(&self, p: &Point3<f64>) -> bool {
+        let mut k = [0usize; 3];
+        for a in 0..3 {
+            let c = ((p[a] - self.origin[a]) / self.cell).floor();
+            k[a] = c.clamp(0.0, (self.dims[a] - 1) as f64) as usize;
+        }
+        self.occupied[k[0] + self.dims[0] * (k[1] + self.dims[1] * k[2])]
+    }
 }

@@ -131,10 +131,20 @@ pub fn rebuild_from_tangent_planes(
     let band = largest + near;
     // Per node: signed distance to the planes, squared distance to the samples, and how far
     // those samples moved to S_i.
-    let field = weighted_nearest(phi, previous, band, radius, ExtendFrom::Node, |s, x| {
-        let d = x - previous[s];
-        Vector3::new(normals[s].dot(&d), d.norm_squared(), details[s].norm())
-    });
+    // Farthest a node may be from its samples and still take their planes (see below).
+    let reach = near + 2.0 * h;
+    let field = weighted_nearest(
+        phi,
+        previous,
+        band,
+        radius,
+        reach,
+        ExtendFrom::Node,
+        |s, x| {
+            let d = x - previous[s];
+            Vector3::new(normals[s].dot(&d), d.norm_squared(), details[s].norm())
+        },
+    );
     let mut out = phi.clone();
     for (v, f) in out.data_mut().iter_mut().zip(&field) {
         match f {
@@ -149,7 +159,15 @@ pub fn rebuild_from_tangent_planes(
             _ => {}
         }
     }
-    redistance(&mut out, &RedistanceOptions::default())?;
+    // A band is enough for marching cubes and for the next level's rebuild (which reads φ's sign
+    // beyond it and takes distances only near the samples).
+    redistance(
+        &mut out,
+        &RedistanceOptions {
+            band: Some(band.max(8.0 * h)),
+            ..RedistanceOptions::default()
+        },
+    )?;
     Ok(out)
 }
 
