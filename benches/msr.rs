@@ -19,10 +19,9 @@
 
 mod common;
 
-use common::{root, time_median, write_points, Reference};
+use common::{time_median, write_points, Reference};
 use std::ffi::OsString;
 use std::path::Path;
-use std::process::Command;
 use std::time::{Duration, Instant};
 use vesselmsr::grid::{grid_for_mesh, GridOptions};
 use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
@@ -56,30 +55,6 @@ fn ours(mesh: &vesselmsr::TriMesh, phi0: &vesselmsr::grid::Grid3) -> (Decomposit
         );
     }
     (d, decomposed, start.elapsed().as_secs_f64())
-}
-
-/// `reference/msr.py` on φ_0 and X_0: its JSON answer.
-fn reference_msr(
-    python: &Path,
-    phi: &Path,
-    points: &Path,
-    dt: f64,
-    steps: usize,
-) -> Option<serde_json::Value> {
-    let out = Command::new(python)
-        .arg(root().join("reference/msr.py"))
-        .arg(phi)
-        .arg(points)
-        .arg(OsString::from(dt.to_string()))
-        .arg(steps.to_string())
-        .arg(LEVELS.to_string())
-        .output()
-        .ok()?;
-    if !out.status.success() {
-        eprintln!("reference failed: {}", String::from_utf8_lossy(&out.stderr));
-        return None;
-    }
-    serde_json::from_slice(&out.stdout).ok()
 }
 
 fn main() {
@@ -126,15 +101,24 @@ fn main() {
     let Some(reference) = Reference::find_or_notice("reference timing") else {
         return;
     };
-    drop(reference);
-    let python = std::env::var_os("VESSELMSR_PYTHON")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| root().join("reference/.venv/bin/python"));
     let tmp = tempfile::tempdir().expect("a temporary folder");
     let phi_path = tmp.path().join("phi0.npy");
     vesselmsr::io::write_npy(&phi_path, &phi0).expect("write φ_0");
     let points = write_points(tmp.path(), &m.samples_at(0)).expect("write X_0");
-    let Some(theirs) = reference_msr(&python, &phi_path, &points, m.params.dt, steps) else {
+    // reference/msr.py PHI.npy POINTS.f64 DT STEPS LEVELS: one JSON line.
+    let (dt, steps, levels) = (
+        OsString::from(m.params.dt.to_string()),
+        OsString::from(steps.to_string()),
+        OsString::from(LEVELS.to_string()),
+    );
+    let args = [
+        phi_path.as_os_str(),
+        points.as_os_str(),
+        &dt,
+        &steps,
+        &levels,
+    ];
+    let Some(theirs) = reference.with_script("msr.py").run(&args) else {
         return;
     };
     let ref_s = theirs["seconds"].as_f64().unwrap_or(f64::NAN);

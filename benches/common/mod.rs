@@ -67,6 +67,14 @@ impl Reference {
         })
     }
 
+    /// The same Python running another script of `reference/` (e.g. `msr.py`).
+    pub fn with_script(&self, name: &str) -> Reference {
+        Reference {
+            python: self.python.clone(),
+            script: root().join("reference").join(name),
+        }
+    }
+
     /// [`Reference::find`], printing a notice that `what` is skipped when the oracle is missing.
     pub fn find_or_notice(what: &str) -> Option<Reference> {
         let reference = Reference::find();
