@@ -14,7 +14,8 @@ use super::sample::sample_for_spacing;
 use super::{Msr, MsrParams};
 use crate::grid::Grid3;
 use crate::levelset::redistance::{redistance, RedistanceOptions};
-use crate::motion::flow::{Flow, FlowOptions, StepReport};
+use crate::motion::evolve::step_count;
+use crate::motion::flow::{Flow, FlowOptions, StepReport, MIN_DT_VOXELS2};
 use crate::motion::velocity::Velocity;
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
@@ -108,21 +109,16 @@ pub fn level_schedule(opts: &DecomposeOptions, h: f64) -> Result<(f64, f64, usiz
     }
     let per_level = time / opts.levels as f64;
     let dt = opts.dt.unwrap_or(2.0 * h * h);
-    if !(dt.is_finite() && dt > 0.0) {
-        return Err(Error::Geometry(format!(
-            "the time step must be positive and finite (world length²), got {dt}"
-        )));
-    }
-    // Below a quarter of h² per level the motion is within the redistancer's noise.
-    let min_level = 0.25 * h * h;
+    let steps = step_count(per_level, dt)?;
+    // Below the flow's smallest step per level the motion is within the redistancer's noise.
+    let min_level = MIN_DT_VOXELS2 * h * h;
     if per_level < min_level {
         return Err(Error::Geometry(format!(
             "{} levels in a time of {time:.4e} leave {per_level:.3e} per level, less than \
-             0.25 h² = {min_level:.3e} (h = {h:.4e}): use fewer levels or a longer --time",
+             {MIN_DT_VOXELS2} h² = {min_level:.3e} (h = {h:.4e}): use fewer levels or a longer --time",
             opts.levels
         )));
     }
-    let steps = (per_level / dt * (1.0 - 1e-9)).ceil().max(1.0) as usize;
     Ok((time, per_level / steps as f64, steps))
 }
 
@@ -224,11 +220,7 @@ pub fn decompose(
 fn outward_normals(phi: &Grid3, points: &[Point3<f64>]) -> Vec<Vector3<f64>> {
     points
         .par_iter()
-        .map(|p| {
-            phi.gradient_tricubic(p)
-                .and_then(|g| g.try_normalize(1e-12))
-                .unwrap_or_else(Vector3::zeros)
-        })
+        .map(|p| unit_normal(phi, p).unwrap_or_else(Vector3::zeros))
         .collect()
 }
 
@@ -236,10 +228,6 @@ fn outward_normals(phi: &Grid3, points: &[Point3<f64>]) -> Vec<Vector3<f64>> {
 /// points where it cannot be evaluated are skipped.
 pub fn mean_abs_curvature(phi: &Grid3, points: &[Point3<f64>]) -> f64 {
     let d = 0.5 * phi.voxel();
-    let unit = |p: &Point3<f64>| {
-        phi.gradient_tricubic(p)
-            .and_then(|g| g.try_normalize(1e-12))
-    };
     let (sum, count) = points
         .par_iter()
         .filter_map(|p| {
@@ -247,11 +235,18 @@ pub fn mean_abs_curvature(phi: &Grid3, points: &[Point3<f64>]) -> f64 {
             for a in 0..3 {
                 let mut e = Vector3::zeros();
                 e[a] = d;
-                div += (unit(&(p + e))?[a] - unit(&(p - e))?[a]) / (2.0 * d);
+                div +=
+                    (unit_normal(phi, &(p + e))?[a] - unit_normal(phi, &(p - e))?[a]) / (2.0 * d);
             }
             Some(div.abs())
         })
         .fold(|| (0.0, 0usize), |(s, c), k| (s + k, c + 1))
         .reduce(|| (0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
     sum / count.max(1) as f64
+}
+
+/// ∇φ/|∇φ| of the tricubic interpolant at `p`; None off the grid or where the gradient vanishes.
+fn unit_normal(phi: &Grid3, p: &Point3<f64>) -> Option<Vector3<f64>> {
+    phi.gradient_tricubic(p)
+        .and_then(|g| g.try_normalize(1e-12))
 }
