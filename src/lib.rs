@@ -13,6 +13,7 @@ pub mod bvh;
 pub mod cli;
 pub mod error;
 pub mod grid;
+pub mod inpaint;
 pub mod io;
 pub mod levelset;
 pub mod mesh;

@@ -47,9 +47,7 @@ pub enum Command {
     /// Distances between two surfaces (Hausdorff, mean, RMS) and their volumes.
     Compare(compare::CompareArgs),
     /// Signed distance grid φ of a mesh (negative inside), written as .npy (+ .npy.json sidecar)
-    /// or .vti.
-    /// Signed distance grid φ of a mesh (negative inside), written as .npy (+ .npy.json sidecar)
-    /// or .vti.
+    /// or .vti or .nrrd.
     Voxelize(voxelize::VoxelizeArgs),
     /// Mesh → signed distance grid → marching cubes: a closed, manifold, outward mesh.
     Remesh(remesh::RemeshArgs),

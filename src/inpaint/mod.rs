@@ -1,0 +1,6 @@
+//! Vessel repair by surface inpainting (paper Section 4, Algorithm 4 with eq. 4.1 and 4.2):
+//! the damaged regions D (`region`), synthetic damaged vessels with known truth (`phantom`), and
+//! the inpainting loop itself.
+
+pub mod phantom;
+pub mod region;

@@ -1,0 +1,1 @@
+//! Synthetic damaged vessels with known ground truth.

@@ -1,0 +1,1 @@
+//! Stenosis and inpainted-volume measures of a repaired vessel.
