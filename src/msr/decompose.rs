@@ -10,6 +10,7 @@
 //! detail w_i = W_i·n_i with n_i = ∇φ(t_i)/|∇φ(t_i)| at X_i (positive outward).
 
 use super::project::{project_to_zero_level, LevelProjectOptions};
+use super::rescue::rescue_unconverged;
 use super::sample::sample_for_spacing;
 use super::{Msr, MsrParams};
 use crate::grid::Grid3;
@@ -157,7 +158,8 @@ pub fn decompose(
         }
         let last = last.expect("at least one step per level");
         redistance(&mut phi, &RedistanceOptions::default())?;
-        let projected = project_to_zero_level(&phi, &x, &opts.projection);
+        let mut projected = project_to_zero_level(&phi, &x, &opts.projection);
+        rescue_unconverged(&phi, &x, &mut projected, &opts.projection)?;
         let unconverged = projected.iter().filter(|p| !p.converged).count();
         let next: Vec<Point3<f64>> = projected.iter().map(|p| p.point).collect();
         let w: Vec<Vector3<f64>> = next.iter().zip(&x).map(|(a, b)| a - b).collect();

@@ -63,6 +63,38 @@ pub fn weighted_nearest<T>(
 where
     T: Copy + Send + std::ops::Add<Output = T> + std::ops::Mul<f64, Output = T>,
 {
+    let two_sigma2 = 2.0 * (0.5 * radius).powi(2);
+    reduce_nearest(phi, points, band, reach, from, |y, found| {
+        let d2min = found.first()?.1;
+        let mut sum: Option<T> = None;
+        let mut weight = 0.0;
+        for &(s, d2) in found {
+            let w = (-(d2 - d2min) / two_sigma2).exp();
+            let term = value(s, y) * w;
+            sum = Some(match sum {
+                Some(acc) => acc + term,
+                None => term,
+            });
+            weight += w;
+        }
+        sum.map(|acc| acc * (1.0 / weight))
+    })
+}
+
+/// At every node with |φ| ≤ `band` whose nearest sample is within `reach` (world units) of its
+/// query point (`from`): `reduce(node, nearest)` over its [`NEAREST`] nearest samples, given as
+/// (index, squared distance to the query point), nearest first and all within `reach`.
+pub fn reduce_nearest<T>(
+    phi: &Grid3,
+    points: &[Point3<f64>],
+    band: f64,
+    reach: f64,
+    from: ExtendFrom,
+    reduce: impl Fn(&Point3<f64>, &[(usize, f64)]) -> Option<T> + Sync,
+) -> Vec<Option<T>>
+where
+    T: Send,
+{
     let none = || (0..phi.data().len()).map(|_| None).collect();
     if points.is_empty() {
         return none();
@@ -71,7 +103,6 @@ where
     let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
         return none();
     };
-    let two_sigma2 = 2.0 * (0.5 * radius).powi(2);
     let reach2 = reach * reach;
     let k = NonZero::new(NEAREST.min(points.len())).expect("k ≥ 1");
     let near = NearSamples::new(phi, points, reach);
@@ -99,27 +130,19 @@ where
                     }
                 }
             };
-            let found = tree
+            let found: Vec<(usize, f64)> = tree
                 .query(&[query.x, query.y, query.z])
                 .nearest_n::<SquaredEuclidean<f64>>(k)
                 .within(reach2)
-                .execute();
-            let d2min = found.first()?.distance;
-            if d2min > reach2 {
+                .execute()
+                .into_iter()
+                .filter(|f| f.distance <= reach2)
+                .map(|f| (f.item as usize, f.distance))
+                .collect();
+            if found.is_empty() {
                 return None;
             }
-            let mut sum: Option<T> = None;
-            let mut weight = 0.0;
-            for f in found {
-                let w = (-(f.distance - d2min) / two_sigma2).exp();
-                let term = value(f.item as usize, &y) * w;
-                sum = Some(match sum {
-                    Some(acc) => acc + term,
-                    None => term,
-                });
-                weight += w;
-            }
-            sum.map(|acc| acc * (1.0 / weight))
+            reduce(&y, &found)
         })
         .collect()
 }

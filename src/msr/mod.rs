@@ -3,15 +3,17 @@
 //! sample points of the surface are followed across the scales of a curvature motion, and the
 //! displacements W_i between consecutive scales are the details; MSR = {W_1..W_N, φ_T}.
 //! `representation` holds the data, `archive` its `.npz` file, `sample` the sample points X_0,
-//! `project` the Newton projection onto a zero level set, `extend` and `reconstruct` the
+//! `project` the Newton projection onto a zero level set (`rescue` for the points where it stalls), `extend` and `reconstruct` the
 //! reconstruction by the level set.
 
 pub mod archive;
+pub mod cover;
 pub mod decompose;
 pub mod extend;
 pub mod project;
 pub mod reconstruct;
 pub mod representation;
+pub mod rescue;
 pub mod sample;
 
 pub use representation::{Msr, MsrParams};

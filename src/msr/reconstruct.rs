@@ -8,12 +8,22 @@
 //! own positions on S_{i−1}, X_{i−1} = X_i − W_i, looked up around x ([`Departure`]). Nodes outside the band keep φ_i; the result is redistanced by fast
 //! sweeping. (The reconstruction by vertices needs none of this: [`super::Msr::mesh_at`].)
 
-use super::extend::{extend_to_band, weighted_nearest, ExtendFrom, NodeField};
+use super::extend::{extend_to_band, reduce_nearest, ExtendFrom, NodeField};
 use crate::grid::Grid3;
 use crate::levelset::redistance::{redistance, RedistanceOptions};
 use crate::Result;
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Point3, Vector3, Vector4};
 use rayon::prelude::*;
+
+/// Radius of the tangent disc each sample stands for (voxels): about half the spacing of the
+/// samples.
+const DISC_RADIUS: f64 = 0.5;
+/// Scale of the soft minimum over the discs (voxels): a disc this much farther than the nearest
+/// weighs e⁻¹ of it.
+const DISC_SOFTNESS: f64 = 0.1;
+/// A node takes tangent planes only if its nearest discs' samples are at most this many voxels
+/// off their normal lines through it.
+const LATERAL_REACH: f64 = 1.5;
 
 /// Options of [`advect_back`].
 #[derive(Debug, Clone, Copy)]
@@ -110,8 +120,8 @@ pub fn advect_back(
 }
 
 /// φ_{i−1} from φ_i and the samples of S_{i−1} (X_{i−1}, with their outward normals n_{i−1} and
-/// the details W_i that took them to S_i): near the samples, each node takes the weighted mean,
-/// over its nearest samples, of its signed distance to their tangent planes n·(x − X) (the
+/// the details W_i that took them to S_i): near the samples, each node takes its signed distance
+/// n·(x − X) to the tangent plane of the nearest sample's disc (a soft minimum; see below) (the
 /// semi-Lagrangian step φ_i(y) of [`advect_back`] carried with the rotation of the sample's frame
 /// from n_i to n_{i−1}, which to first order is exactly that distance); elsewhere the side comes
 /// from φ_i, at least `band_margin` voxels from the surface; then fast sweeping.
@@ -125,35 +135,54 @@ pub fn rebuild_from_tangent_planes(
     opts: &AdvectOptions,
 ) -> Result<Grid3> {
     let h = phi.voxel();
-    let radius = opts.extension_radius * h;
     let largest = details.iter().map(|w| w.norm()).fold(0.0, f64::max);
     let near = opts.band_margin * h;
     let band = largest + near;
-    // Per node: signed distance to the planes, squared distance to the samples, and how far
-    // those samples moved to S_i.
     // Farthest a node may be from its samples and still take their planes (see below).
     let reach = near + 2.0 * h;
-    let field = weighted_nearest(
-        phi,
-        previous,
-        band,
-        radius,
-        reach,
-        ExtendFrom::Node,
-        |s, x| {
-            let d = x - previous[s];
-            Vector3::new(normals[s].dot(&d), d.norm_squared(), details[s].norm())
-        },
-    );
+    // Each sample stands for a small disc of S_{i−1} (its tangent plane within DISC_RADIUS
+    // voxels of it). A node takes the signed distance to the plane of the disc nearest to it
+    // (a soft minimum over its nearest samples): where two sheets of S_{i−1} lie close, as the
+    // banks of a narrow sulcus do, each node follows its own sheet rather than an average of
+    // both.
+    let disc = DISC_RADIUS * h;
+    let softness = DISC_SOFTNESS * h;
+    let lateral_reach = LATERAL_REACH * h;
+    let field = reduce_nearest(phi, previous, band, reach, ExtendFrom::Node, |x, found| {
+        let mut best = f64::INFINITY;
+        let per: Vec<(f64, f64, f64)> = found
+            .iter()
+            .map(|&(s, d2)| {
+                let along = normals[s].dot(&(x - previous[s]));
+                let lateral = (d2 - along * along).max(0.0).sqrt();
+                let to_disc = along.hypot((lateral - disc).max(0.0));
+                best = best.min(to_disc);
+                (to_disc, along, lateral)
+            })
+            .collect();
+        let (mut sum, mut weight, mut lateral, mut moved) = (0.0, 0.0, 0.0, 0.0);
+        for (&(s, _), &(to_disc, along, lat)) in found.iter().zip(&per) {
+            let w = (-(to_disc - best) / softness).exp();
+            sum += w * along;
+            lateral += w * lat;
+            moved += w * details[s].norm();
+            weight += w;
+        }
+        // (plane value, distance to the nearest disc, lateral offset, how far the samples moved)
+        Some(Vector4::new(
+            sum / weight,
+            best,
+            lateral / weight,
+            moved / weight,
+        ))
+    });
     let mut out = phi.clone();
     for (v, f) in out.data_mut().iter_mut().zip(&field) {
         match f {
             // Tangent planes only where φ_i cannot be trusted for the side — within the
-            // distance the nearby samples moved (counted up to 2h), plus a margin — and not
-            // beyond: far from
-            // the samples a plane's side is no guide to inside and outside (the nearest sample
-            // of a concave region can be across the shape).
-            Some(f) if f.y <= (near + f.z.min(2.0 * h)).powi(2) => *v = f.x as f32,
+            // distance the nearby samples moved (counted up to 2h), plus a margin — and only
+            // where the nearest disc is one whose normal line passes near the node.
+            Some(f) if f.y <= near + f.w.min(2.0 * h) && f.z <= lateral_reach => *v = f.x as f32,
             // Beyond: the side φ_i gives, at least `near` from the surface.
             _ if (v.abs() as f64) < near => *v = (near as f32).copysign(*v),
             _ => {}
