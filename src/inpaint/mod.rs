@@ -2,5 +2,6 @@
 //! the damaged regions D (`region`), synthetic damaged vessels with known truth (`phantom`), and
 //! the inpainting loop itself.
 
+pub mod harmonic;
 pub mod phantom;
 pub mod region;
