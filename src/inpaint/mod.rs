@@ -2,6 +2,11 @@
 //! the damaged regions D (`region`), synthetic damaged vessels with known truth (`phantom`), and
 //! the inpainting loop itself.
 
+pub mod axial;
+pub mod axis;
 pub mod harmonic;
+pub mod mask;
+pub mod msr_fill;
 pub mod phantom;
 pub mod region;
+pub mod stitch;

@@ -1,0 +1,169 @@
+//! Stitching the inpainted patch into the original mesh (`--keep-outside`): the triangles of the
+//! input with every vertex outside D are kept unchanged; the marching-cubes surface of the
+//! inpainted φ is kept where it lies deeper than a margin inside D; each hole the removal left is
+//! joined to the patch boundary loop facing it by a strip of triangles (a zipper that advances
+//! along whichever loop gives the shorter new edge). The result is checked (closed where the input
+//! was, manifold, consistently oriented); the caller falls back to the full re-mesh otherwise.
+
+use super::region::Ball;
+use crate::mesh::topology::{boundary_loops, EdgeMap};
+use crate::{Error, Result, TriMesh};
+use nalgebra::Point3;
+use std::collections::{HashMap, HashSet};
+
+/// Depth of `p` inside the union of `balls` (positive inside), world units.
+pub fn depth_in(balls: &[Ball], p: &Point3<f64>) -> f64 {
+    balls
+        .iter()
+        .map(|b| b.radius - (p - b.center).norm())
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// The part of `mesh` made of the faces `keep` selects, its vertices renumbered compactly.
+fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> TriMesh {
+    let mut map: HashMap<u32, u32> = HashMap::new();
+    let mut out = TriMesh::default();
+    for f in mesh.faces.iter().filter(|f| keep(f)) {
+        let g = f.map(|v| {
+            *map.entry(v).or_insert_with(|| {
+                out.vertices.push(mesh.vertices[v as usize]);
+                (out.vertices.len() - 1) as u32
+            })
+        });
+        out.faces.push(g);
+    }
+    out
+}
+
+/// A boundary loop turned so that consecutive vertices a→b are a directed edge of a face.
+fn directed_loop(mesh: &TriMesh, lp: &[u32]) -> Vec<u32> {
+    let mut directed: HashSet<(u32, u32)> = HashSet::new();
+    for f in &mesh.faces {
+        for k in 0..3 {
+            directed.insert((f[k], f[(k + 1) % 3]));
+        }
+    }
+    if lp.len() >= 2 && directed.contains(&(lp[0], lp[1])) {
+        lp.to_vec()
+    } else {
+        lp.iter().rev().copied().collect()
+    }
+}
+
+fn centroid(mesh: &TriMesh, lp: &[u32]) -> Point3<f64> {
+    let s = lp.iter().fold(nalgebra::Vector3::zeros(), |s, &v| {
+        s + mesh.vertices[v as usize].coords
+    });
+    Point3::from(s / lp.len().max(1) as f64)
+}
+
+/// Joins loop `a` (of the kept part, directed along its faces) and loop `b` (of the patch,
+/// directed along its faces), both as indices into `verts`, by a strip of triangles oriented
+/// consistently with both.
+fn zipper(verts: &[Point3<f64>], a: &[u32], b: &[u32]) -> Vec<[u32; 3]> {
+    // Walk a forward and b backward, from the closest pair.
+    let (n, m) = (a.len(), b.len());
+    let (mut best, mut i0, mut k0) = (f64::INFINITY, 0, 0);
+    for (i, &va) in a.iter().enumerate() {
+        for (k, &vb) in b.iter().enumerate() {
+            let d = (verts[va as usize] - verts[vb as usize]).norm_squared();
+            if d < best {
+                (best, i0, k0) = (d, i, k);
+            }
+        }
+    }
+    let av = |i: usize| a[(i0 + i) % n];
+    let bv = |k: usize| b[(k0 + m - k % m) % m];
+    let dist = |p: u32, q: u32| (verts[p as usize] - verts[q as usize]).norm();
+    let (mut i, mut k) = (0, 0);
+    let mut faces = Vec::with_capacity(n + m);
+    while i < n || k < m {
+        let advance_a = if i == n {
+            false
+        } else if k == m {
+            true
+        } else {
+            dist(av(i + 1), bv(k)) <= dist(av(i), bv(k + 1))
+        };
+        if advance_a {
+            faces.push([av(i + 1), av(i), bv(k)]);
+            i += 1;
+        } else {
+            faces.push([bv(k), bv(k + 1), av(i)]);
+            k += 1;
+        }
+    }
+    faces
+}
+
+/// The stitched mesh (see the module docs): `original` (the input, closed or with the open ends
+/// it should keep), `patch` (a closed surface: the marching cubes of the inpainted φ), `balls` (D),
+/// `margin` (world units: how far inside D the patch is cut). Errors when the holes and the patch
+/// loops do not pair up one to one or the result is not a clean surface.
+pub fn stitch_patch(
+    original: &TriMesh,
+    patch: &TriMesh,
+    balls: &[Ball],
+    margin: f64,
+) -> Result<TriMesh> {
+    let inside: Vec<bool> = original
+        .vertices
+        .iter()
+        .map(|p| depth_in(balls, p) > 0.0)
+        .collect();
+    let kept = submesh(original, |f| f.iter().all(|&v| !inside[v as usize]));
+    let cut = submesh(patch, |f| {
+        f.iter()
+            .all(|&v| depth_in(balls, &patch.vertices[v as usize]) > margin)
+    });
+    let before = EdgeMap::new(original).boundary_edges();
+    // The holes the removal made: loops of the kept part with a vertex within two mean edges of D.
+    let reach = 2.0 * crate::mesh::measures::mean_edge_length(original);
+    let near = |p: &Point3<f64>| depth_in(balls, p) > -reach;
+    let holes: Vec<Vec<u32>> = boundary_loops(&kept)
+        .into_iter()
+        .filter(|lp| lp.iter().any(|&v| near(&kept.vertices[v as usize])))
+        .map(|lp| directed_loop(&kept, &lp))
+        .collect();
+    let rims: Vec<Vec<u32>> = boundary_loops(&cut)
+        .into_iter()
+        .map(|lp| directed_loop(&cut, &lp))
+        .collect();
+    if holes.len() != rims.len() || holes.is_empty() {
+        return Err(Error::Geometry(format!(
+            "stitching: {} holes around D but {} patch loops",
+            holes.len(),
+            rims.len()
+        )));
+    }
+    let offset = kept.vertices.len() as u32;
+    let mut out = kept.clone();
+    out.append(&cut);
+    let mut free: Vec<bool> = vec![true; rims.len()];
+    for hole in &holes {
+        let c = centroid(&kept, hole);
+        let (r, _) = rims
+            .iter()
+            .enumerate()
+            .filter(|(r, _)| free[*r])
+            .map(|(r, lp)| (r, (centroid(&cut, lp) - c).norm()))
+            .min_by(|x, y| x.1.total_cmp(&y.1))
+            .ok_or_else(|| Error::Geometry("stitching: no patch loop left".into()))?;
+        free[r] = false;
+        let b: Vec<u32> = rims[r].iter().map(|&v| v + offset).collect();
+        out.faces.extend(zipper(&out.vertices, hole, &b));
+    }
+    let edges = EdgeMap::new(&out);
+    if edges.non_manifold_edges() > 0
+        || !edges.is_consistently_oriented()
+        || edges.boundary_edges() > before
+        || edges.non_manifold_vertices() > 0
+    {
+        return Err(Error::Geometry(format!(
+            "stitching produced a surface with {} open and {} non-manifold edges",
+            edges.boundary_edges(),
+            edges.non_manifold_edges()
+        )));
+    }
+    Ok(out)
+}
