@@ -3,5 +3,6 @@
 //! the inpainting loop itself.
 
 pub mod harmonic;
+pub mod holes;
 pub mod phantom;
 pub mod region;
