@@ -157,7 +157,11 @@ fn describe_loop(
         && planarity <= options.planarity_tolerance
         && wall_alignment <= options.max_wall_alignment;
     LoopInfo {
-        kind: if is_end { LoopKind::End } else { LoopKind::Hole },
+        kind: if is_end {
+            LoopKind::End
+        } else {
+            LoopKind::Hole
+        },
         vertices,
         center,
         normal,

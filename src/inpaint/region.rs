@@ -258,7 +258,9 @@ pub fn validate_regions(mesh: &TriMesh, balls: &[Ball]) -> Result<()> {
         return Err(Error::Geometry("no regions".into()));
     }
     if mesh.faces.is_empty() {
-        return Err(Error::InvalidMesh("regions need a mesh with triangles".into()));
+        return Err(Error::InvalidMesh(
+            "regions need a mesh with triangles".into(),
+        ));
     }
     let (lo, hi) = bounding_box(mesh);
     let bvh = MeshBvh::new(mesh);
