@@ -368,3 +368,40 @@ fn real_open_meshes_have_only_ends() {
         assert!(loops.iter().all(|l| l.kind == LoopKind::End), "{file}");
     }
 }
+
+#[test]
+fn oblique_ends_are_ends_and_a_missing_triangle_is_a_hole() {
+    // Shear z += x·tan 25°: both ends become planes 25° off perpendicular to the axis.
+    let mut mesh = tube3();
+    let k = 25f64.to_radians().tan();
+    for v in &mut mesh.vertices {
+        v.z += v.x * k;
+    }
+    let loops = classify_loops(&mesh, &LoopOptions::default());
+    for l in &loops {
+        println!(
+            "oblique {:?}: planarity {:.3} alignment {:.3}",
+            l.kind, l.planarity, l.wall_alignment
+        );
+    }
+    assert_eq!(loops.len(), 2);
+    assert!(loops.iter().all(|l| l.kind == LoopKind::End));
+
+    // One triangle missing from the middle of the wall.
+    let mut mesh = tube3();
+    let f = mesh.faces.len() / 2 + 7;
+    let removed = mesh.faces.remove(f);
+    let (balls, loops) = hole_regions(&mesh, &LoopOptions::default()).unwrap();
+    assert_eq!(loops.len(), 3);
+    assert_eq!(balls.len(), 1);
+    let hole = loops.iter().find(|l| l.kind == LoopKind::Hole).unwrap();
+    let mut got = hole.vertices.clone();
+    let mut want = removed.to_vec();
+    got.sort_unstable();
+    want.sort_unstable();
+    assert_eq!(got, want);
+    println!(
+        "one-triangle hole: alignment {:.3}, ball radius {:.3}",
+        hole.wall_alignment, balls[0].radius
+    );
+}
