@@ -5,6 +5,7 @@
 pub mod axial;
 pub mod axis;
 pub mod harmonic;
+pub mod holes;
 pub mod mask;
 pub mod msr_fill;
 pub mod phantom;

@@ -1,0 +1,200 @@
+//! `--holes`: telling the holes of a vessel mesh from its open vessel ends, and one ball of the
+//! damaged region D per hole (paper Section 4: D is where the surface is missing; the open ends
+//! where a vessel was cut are not damage and must stay open).
+//!
+//! Each boundary loop ([`crate::mesh::topology::boundary_loops`]) gets a best-fit plane (the
+//! least-variance direction of its vertices about their centroid). A vessel end is a cut across
+//! the vessel: the loop is nearly planar and its plane is roughly perpendicular to the vessel axis,
+//! so the wall next to it has normals lying in the loop's plane (|wall normal · plane normal| near
+//! 0). A hole in the wall has the wall's normals along its plane normal (near 1), or is not planar
+//! at all. Anything that is not a clear end is a hole.
+
+use crate::inpaint::region::Ball;
+use crate::mesh::topology::boundary_loops;
+use crate::mesh::TriMesh;
+use crate::{Error, Result};
+use nalgebra::{Matrix3, Point3, Vector3};
+
+/// What a boundary loop is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LoopKind {
+    /// An open vessel end (a planar cut across the vessel): left open.
+    End,
+    /// A hole in the surface: to be repaired.
+    Hole,
+}
+
+/// Thresholds of [`classify_loops`] and the ball size of [`hole_regions`] (all dimensionless).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopOptions {
+    /// Largest off-plane distance of an end's vertices from their best-fit plane, as a fraction of
+    /// the loop's radius (mean vertex distance to the centroid).
+    pub planarity_tolerance: f64,
+    /// Largest mean |wall normal · loop plane normal| of an end (the wall of the faces touching
+    /// the loop, area-weighted): 0 for a cut exactly across a straight tube, near 1 for a hole in
+    /// a wall. 0.5 accepts cuts up to about 30° oblique.
+    pub max_wall_alignment: f64,
+    /// A hole's ball radius is this factor × the largest distance of a loop vertex from the
+    /// centroid, plus one mean loop edge length.
+    pub ball_factor: f64,
+}
+
+impl Default for LoopOptions {
+    fn default() -> Self {
+        LoopOptions {
+            planarity_tolerance: 0.2,
+            max_wall_alignment: 0.5,
+            ball_factor: 1.25,
+        }
+    }
+}
+
+/// One boundary loop and its classification.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopInfo {
+    /// End or hole.
+    pub kind: LoopKind,
+    /// The loop's vertices in order (as [`boundary_loops`] gives them).
+    pub vertices: Vec<u32>,
+    /// Centroid of the loop's vertices (world units).
+    pub center: Point3<f64>,
+    /// Unit normal of the best-fit plane (sign arbitrary).
+    pub normal: Vector3<f64>,
+    /// Mean distance of the loop's vertices to the centroid (world units).
+    pub radius: f64,
+    /// Largest distance of a loop vertex to the centroid (world units).
+    pub max_distance: f64,
+    /// Mean length of the loop's edges (world units).
+    pub mean_edge: f64,
+    /// Largest off-plane distance of a vertex / `radius` (dimensionless).
+    pub planarity: f64,
+    /// Area-weighted mean |face normal · `normal`| over the faces touching the loop (0..1).
+    pub wall_alignment: f64,
+}
+
+/// Finds and classifies every boundary loop of `mesh` (see the module docs), in the order of
+/// [`boundary_loops`]. Loops of fewer than three vertices or of zero size are holes.
+pub fn classify_loops(mesh: &TriMesh, options: &LoopOptions) -> Vec<LoopInfo> {
+    let loops = boundary_loops(mesh);
+    if loops.is_empty() {
+        return Vec::new();
+    }
+    // Faces touching each vertex, for the wall next to each loop.
+    let mut vertex_faces: Vec<Vec<u32>> = vec![Vec::new(); mesh.num_vertices()];
+    for (f, tri) in mesh.faces.iter().enumerate() {
+        for &v in tri {
+            if let Some(list) = vertex_faces.get_mut(v as usize) {
+                list.push(f as u32);
+            }
+        }
+    }
+    loops
+        .into_iter()
+        .map(|vs| describe_loop(mesh, &vertex_faces, vs, options))
+        .collect()
+}
+
+/// Measures one loop and classifies it.
+fn describe_loop(
+    mesh: &TriMesh,
+    vertex_faces: &[Vec<u32>],
+    vertices: Vec<u32>,
+    options: &LoopOptions,
+) -> LoopInfo {
+    let pts: Vec<Point3<f64>> = vertices
+        .iter()
+        .map(|&v| mesh.vertices[v as usize])
+        .collect();
+    let n = pts.len().max(1) as f64;
+    let center = Point3::from(pts.iter().map(|p| p.coords).sum::<Vector3<f64>>() / n);
+    let mut cov = Matrix3::zeros();
+    for p in &pts {
+        let d = p - center;
+        cov += d * d.transpose();
+    }
+    let eig = cov.symmetric_eigen();
+    let normal = eig
+        .eigenvectors
+        .column(eig.eigenvalues.imin())
+        .into_owned()
+        .try_normalize(0.0)
+        .unwrap_or_else(Vector3::z);
+    let dists: Vec<f64> = pts.iter().map(|p| (p - center).norm()).collect();
+    let radius = dists.iter().sum::<f64>() / n;
+    let max_distance = dists.iter().cloned().fold(0.0, f64::max);
+    let off_plane = pts
+        .iter()
+        .map(|p| (p - center).dot(&normal).abs())
+        .fold(0.0, f64::max);
+    let planarity = if radius > 0.0 {
+        off_plane / radius
+    } else {
+        f64::INFINITY
+    };
+    let mean_edge = (0..pts.len())
+        .map(|i| (pts[(i + 1) % pts.len()] - pts[i]).norm())
+        .sum::<f64>()
+        / n;
+
+    let mut faces: Vec<u32> = vertices
+        .iter()
+        .flat_map(|&v| vertex_faces[v as usize].iter().copied())
+        .collect();
+    faces.sort_unstable();
+    faces.dedup();
+    let (mut weighted, mut total) = (0.0, 0.0);
+    for &f in &faces {
+        let raw = mesh.face_normal_raw(f as usize);
+        let area = raw.norm();
+        if area > 0.0 {
+            weighted += raw.dot(&normal).abs();
+            total += area;
+        }
+    }
+    let wall_alignment = if total > 0.0 { weighted / total } else { 1.0 };
+
+    let is_end = pts.len() >= 3
+        && planarity <= options.planarity_tolerance
+        && wall_alignment <= options.max_wall_alignment;
+    LoopInfo {
+        kind: if is_end {
+            LoopKind::End
+        } else {
+            LoopKind::Hole
+        },
+        vertices,
+        center,
+        normal,
+        radius,
+        max_distance,
+        mean_edge,
+        planarity,
+        wall_alignment,
+    }
+}
+
+/// The damaged region of `--holes`: one ball per [`LoopKind::Hole`] loop, centred on the loop's
+/// centroid with radius `ball_factor` × its largest vertex distance + one mean loop edge, and
+/// every loop's description. A mesh without boundary loops, or whose loops are all vessel ends,
+/// is an error saying so.
+pub fn hole_regions(mesh: &TriMesh, options: &LoopOptions) -> Result<(Vec<Ball>, Vec<LoopInfo>)> {
+    let loops = classify_loops(mesh, options);
+    if loops.is_empty() {
+        return Err(Error::Geometry("mesh has no boundary loops".into()));
+    }
+    let balls: Vec<Ball> = loops
+        .iter()
+        .filter(|l| l.kind == LoopKind::Hole)
+        .map(|l| Ball {
+            center: l.center,
+            radius: options.ball_factor * l.max_distance + l.mean_edge,
+        })
+        .collect();
+    if balls.is_empty() {
+        return Err(Error::Geometry(format!(
+            "mesh has no holes ({} boundary loops, all open vessel ends)",
+            loops.len()
+        )));
+    }
+    Ok((balls, loops))
+}

@@ -1,0 +1,407 @@
+//! Regions D of the inpainting (src/inpaint/region.rs, src/inpaint/holes.rs): `--region` parsing,
+//! regions files (balls and picked points), validation against the mesh, the local vessel radius
+//! on a tube of known radius, and the classification of boundary loops into vessel ends and holes
+//! on tubes and on the real open-ended meshes, with and without a wall patch cut out.
+
+mod common;
+use common::*;
+
+use nalgebra::Point3;
+use std::path::Path;
+use vesselmsr::bvh::MeshBvh;
+use vesselmsr::inpaint::holes::{classify_loops, hole_regions, LoopKind, LoopOptions};
+use vesselmsr::inpaint::region::{
+    local_vessel_radius, parse_ball, read_regions, validate_regions, Ball, PICKED_RADIUS_FACTOR,
+};
+use vesselmsr::mesh::measures::mean_edge_length;
+use vesselmsr::mesh::primitives::{icosphere, open_tube};
+use vesselmsr::mesh::topology::boundary_loops;
+use vesselmsr::TriMesh;
+
+/// Tube of radius 3 and length 30 along z, 48 segments, 61 rings.
+fn tube3() -> TriMesh {
+    open_tube(3.0, 30.0, 48, 61)
+}
+
+/// `mesh` without the faces whose corners all lie within `d` of `c`, unused vertices kept.
+fn cut_patch(mesh: &TriMesh, c: &Point3<f64>, d: f64) -> TriMesh {
+    let faces = mesh
+        .faces
+        .iter()
+        .filter(|f| {
+            !f.iter()
+                .all(|&v| (mesh.vertices[v as usize] - c).norm() <= d)
+        })
+        .copied()
+        .collect();
+    TriMesh::new(mesh.vertices.clone(), faces)
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn err_text<T: std::fmt::Debug>(r: vesselmsr::Result<T>) -> String {
+    let e = r.expect_err("an error").to_string();
+    println!("error: {e}");
+    e
+}
+
+#[test]
+fn parse_ball_reads_four_numbers() {
+    let b = parse_ball("1.5, -2,3e1,0.25").unwrap();
+    assert_eq!(b.center, Point3::new(1.5, -2.0, 30.0));
+    assert_eq!(b.radius, 0.25);
+}
+
+#[test]
+fn parse_ball_errors() {
+    for bad in ["1,2,3", "1,2,3,4,5", "", "a,2,3,4", "1,2,,4"] {
+        assert!(
+            err_text(parse_ball(bad)).contains("expected x,y,z,r"),
+            "{bad}"
+        );
+    }
+    for bad in ["1,2,3,0", "1,2,3,-1"] {
+        assert!(
+            err_text(parse_ball(bad)).contains("radius must be > 0"),
+            "{bad}"
+        );
+    }
+    for bad in ["nan,2,3,1", "1,inf,3,1", "1,2,3,NaN"] {
+        assert!(
+            err_text(parse_ball(bad)).contains("expected x,y,z,r"),
+            "{bad}"
+        );
+    }
+}
+
+#[test]
+fn local_radius_on_tube_of_radius_3() {
+    let mesh = tube3();
+    let bvh = MeshBvh::new(&mesh);
+    let mut worst: f64 = 0.0;
+    for (k, z) in [5.0, 10.0, 15.0, 22.5].iter().enumerate() {
+        let th = 0.3 + 1.1 * k as f64;
+        let p = Point3::new(3.0 * th.cos(), 3.0 * th.sin(), *z);
+        let r = local_vessel_radius(&mesh, &bvh, &p).expect("a radius");
+        println!("z {z}: local radius {r:.4} (true 3)");
+        worst = worst.max(rel(r, 3.0));
+    }
+    println!("worst relative error {worst:.4}");
+    assert!(worst < 0.05);
+    // Inward-facing tube: the same answer.
+    let mut flipped = mesh.clone();
+    flipped.flip_faces();
+    let fb = MeshBvh::new(&flipped);
+    let r = local_vessel_radius(&flipped, &fb, &Point3::new(3.0, 0.0, 15.0)).unwrap();
+    println!("flipped tube: {r:.4}");
+    assert!(rel(r, 3.0) < 0.05);
+    // A point off the surface is snapped first.
+    let r = local_vessel_radius(&mesh, &bvh, &Point3::new(0.0, 3.4, 12.0)).unwrap();
+    assert!(rel(r, 3.0) < 0.05);
+    assert!(local_vessel_radius(&mesh, &bvh, &Point3::new(f64::NAN, 0.0, 0.0)).is_none());
+}
+
+#[test]
+fn local_radius_on_sphere_is_its_radius() {
+    let mesh = icosphere(4, 2.0, Point3::new(1.0, 1.0, 1.0));
+    let bvh = MeshBvh::new(&mesh);
+    let r = local_vessel_radius(&mesh, &bvh, &Point3::new(3.0, 1.0, 1.0)).unwrap();
+    println!("sphere of radius 2: {r:.4}");
+    assert!(rel(r, 2.0) < 0.05);
+}
+
+#[test]
+fn read_regions_balls_and_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = tube3();
+    let p = write(
+        dir.path(),
+        "r.json",
+        r#"{"regions": [{"center": [0, 3, 10], "radius": 2}], "points": [[3.2, 0, 15], [0, -3, 20]]}"#,
+    );
+    let balls = read_regions(&p, &mesh).unwrap();
+    assert_eq!(balls.len(), 3);
+    assert_eq!(
+        balls[0],
+        Ball {
+            center: Point3::new(0.0, 3.0, 10.0),
+            radius: 2.0
+        }
+    );
+    for b in &balls[1..] {
+        let on_axis = (b.center.x.powi(2) + b.center.y.powi(2)).sqrt();
+        println!("picked ball centre {:?} radius {}", b.center, b.radius);
+        // Snapped onto the polygonal tube (inscribed radius 3 cos(π/48)).
+        assert!((on_axis - 3.0).abs() < 0.01, "{on_axis}");
+        assert!(rel(b.radius, PICKED_RADIUS_FACTOR * 3.0) < 0.05);
+    }
+    assert!((balls[1].center.z - 15.0).abs() < 1e-9);
+    validate_regions(&mesh, &balls).unwrap();
+
+    // Points only.
+    let p = write(dir.path(), "p.json", r#"{"points": [[0, 3, 5]]}"#);
+    assert_eq!(read_regions(&p, &mesh).unwrap().len(), 1);
+    // Balls only, as write_regions writes them.
+    let out = dir.path().join("w.json");
+    vesselmsr::inpaint::region::write_regions(&out, &balls).unwrap();
+    assert_eq!(read_regions(&out, &mesh).unwrap(), balls);
+}
+
+#[test]
+fn read_regions_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = tube3();
+    let cases = [
+        ("bad.json", "{\"regions\": [", "not a regions file"),
+        (
+            "unknown.json",
+            r#"{"regions": [], "balls": []}"#,
+            "unknown field",
+        ),
+        (
+            "unknown_in_ball.json",
+            r#"{"regions": [{"center": [0,0,0], "radius": 1, "r": 2}]}"#,
+            "unknown field",
+        ),
+        (
+            "short.json",
+            r#"{"regions": [{"center": [0,0], "radius": 1}]}"#,
+            "not a regions file",
+        ),
+        ("empty.json", "{}", "no regions"),
+        (
+            "empty_lists.json",
+            r#"{"regions": [], "points": []}"#,
+            "no regions",
+        ),
+    ];
+    for (name, text, word) in cases {
+        let p = write(dir.path(), name, text);
+        let e = err_text(read_regions(&p, &mesh));
+        assert!(e.contains(word), "{name}: {e}");
+        assert!(e.contains(name), "{name}: {e}");
+    }
+    let missing = dir.path().join("missing.json");
+    assert!(err_text(read_regions(&missing, &mesh)).contains("missing.json"));
+}
+
+#[test]
+fn validate_regions_errors() {
+    let mesh = tube3();
+    let ok = Ball {
+        center: Point3::new(3.0, 0.0, 15.0),
+        radius: 1.0,
+    };
+    validate_regions(&mesh, &[ok]).unwrap();
+    let cases = [
+        (Point3::new(3.0, 0.0, 15.0), 0.0, "radius must be > 0"),
+        (Point3::new(3.0, 0.0, 15.0), -2.0, "radius must be > 0"),
+        (Point3::new(3.0, 0.0, 15.0), f64::NAN, "not finite"),
+        (Point3::new(3.0, 0.0, 15.0), f64::INFINITY, "not finite"),
+        (Point3::new(f64::NAN, 0.0, 15.0), 1.0, "not finite"),
+        (
+            Point3::new(50.0, 0.0, 15.0),
+            1.0,
+            "outside the mesh's bounding box",
+        ),
+        (Point3::new(0.0, 0.0, 15.0), 2.0, "touches no surface"),
+    ];
+    for (c, r, word) in cases {
+        let bad = Ball {
+            center: c,
+            radius: r,
+        };
+        let e = err_text(validate_regions(&mesh, &[ok, bad]));
+        assert!(e.contains(word), "{e}");
+        assert!(e.contains("region 2"), "{e}");
+        assert!(
+            e.contains(&format!("centre {}, {}, {}", c.x, c.y, c.z)),
+            "{e}"
+        );
+    }
+    // Grown box: a centre just outside the box but whose ball reaches the wall is fine.
+    validate_regions(
+        &mesh,
+        &[Ball {
+            center: Point3::new(3.5, 0.0, 15.0),
+            radius: 1.0,
+        }],
+    )
+    .unwrap();
+    assert!(err_text(validate_regions(&mesh, &[])).contains("no regions"));
+}
+
+#[test]
+fn open_tube_has_two_ends() {
+    let mesh = tube3();
+    let loops = classify_loops(&mesh, &LoopOptions::default());
+    assert_eq!(loops.len(), 2);
+    for l in &loops {
+        println!(
+            "{:?}: planarity {:.3} alignment {:.3} radius {:.3}",
+            l.kind, l.planarity, l.wall_alignment, l.radius
+        );
+        assert_eq!(l.kind, LoopKind::End);
+        assert!(rel(l.radius, 3.0) < 1e-9);
+        assert!(l.normal.z.abs() > 1.0 - 1e-9);
+    }
+    let e = err_text(hole_regions(&mesh, &LoopOptions::default()));
+    assert!(e.contains("mesh has no holes (2 boundary loops, all open vessel ends)"));
+    let closed = icosphere(2, 1.0, Point3::origin());
+    assert!(err_text(hole_regions(&closed, &LoopOptions::default()))
+        .contains("mesh has no boundary loops"));
+}
+
+#[test]
+fn open_tube_with_wall_patch_removed_has_one_hole() {
+    let tube = tube3();
+    let c = Point3::new(0.0, 3.0, 15.0);
+    let mesh = cut_patch(&tube, &c, 1.5);
+    assert_eq!(boundary_loops(&mesh).len(), 3);
+    let (balls, loops) = hole_regions(&mesh, &LoopOptions::default()).unwrap();
+    for l in &loops {
+        println!(
+            "{:?}: planarity {:.3} alignment {:.3} radius {:.3} centre {:?}",
+            l.kind, l.planarity, l.wall_alignment, l.radius, l.center
+        );
+    }
+    assert_eq!(loops.iter().filter(|l| l.kind == LoopKind::End).count(), 2);
+    assert_eq!(balls.len(), 1);
+    let b = balls[0];
+    println!("hole ball {:?} radius {}", b.center, b.radius);
+    assert!((b.center - c).norm() < 0.5);
+    // The ball covers every vertex of the hole's loop, and is a valid region.
+    let hole = loops.iter().find(|l| l.kind == LoopKind::Hole).unwrap();
+    assert!(hole
+        .vertices
+        .iter()
+        .all(|&v| b.contains(&mesh.vertices[v as usize])));
+    assert!(b.radius < 3.0);
+    validate_regions(&mesh, &balls).unwrap();
+}
+
+#[test]
+fn shipped_aorta_has_only_ends_and_a_cut_patch_is_one_hole() {
+    let mesh = vesselmsr::io::read_mesh(Path::new(&aorta())).unwrap();
+    let options = LoopOptions::default();
+    let loops = classify_loops(&mesh, &options);
+    for l in &loops {
+        println!(
+            "aorta {:?}: {} vertices planarity {:.3} alignment {:.3} radius {:.3}",
+            l.kind,
+            l.vertices.len(),
+            l.planarity,
+            l.wall_alignment,
+            l.radius
+        );
+    }
+    assert_eq!(loops.len(), 3);
+    assert!(loops.iter().all(|l| l.kind == LoopKind::End));
+    assert!(err_text(hole_regions(&mesh, &options)).contains("3 boundary loops"));
+
+    // Cut a patch around the wall vertex farthest from every boundary vertex.
+    let boundary: Vec<Point3<f64>> = loops
+        .iter()
+        .flat_map(|l| l.vertices.iter().map(|&v| mesh.vertices[v as usize]))
+        .collect();
+    let far = |p: &Point3<f64>| {
+        boundary
+            .iter()
+            .map(|b| (b - p).norm())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let c = mesh
+        .vertices
+        .iter()
+        .max_by(|a, b| far(a).total_cmp(&far(b)))
+        .copied()
+        .unwrap();
+    let h = mean_edge_length(&mesh);
+    let cut = cut_patch(&mesh, &c, 3.0 * h);
+    assert_eq!(boundary_loops(&cut).len(), 4);
+    let (balls, loops) = hole_regions(&cut, &options).unwrap();
+    for l in &loops {
+        println!(
+            "cut aorta {:?}: {} vertices planarity {:.3} alignment {:.3} radius {:.3}",
+            l.kind,
+            l.vertices.len(),
+            l.planarity,
+            l.wall_alignment,
+            l.radius
+        );
+    }
+    assert_eq!(balls.len(), 1);
+    println!(
+        "hole ball at {:.3} from the patch centre (patch radius {:.3}), radius {:.3}",
+        (balls[0].center - c).norm(),
+        3.0 * h,
+        balls[0].radius
+    );
+    assert!((balls[0].center - c).norm() < 1.5 * h);
+    validate_regions(&cut, &balls).unwrap();
+}
+
+#[test]
+fn real_open_meshes_have_only_ends() {
+    let Some(dir) = real_dir() else { return };
+    for (file, _, _, loops_expected, closed) in REAL_MESHES {
+        if closed {
+            continue;
+        }
+        let mesh = read_real(&dir, file);
+        let loops = classify_loops(&mesh, &LoopOptions::default());
+        for l in &loops {
+            println!(
+                "{file} {:?}: {} vertices planarity {:.3} alignment {:.3} radius {:.3}",
+                l.kind,
+                l.vertices.len(),
+                l.planarity,
+                l.wall_alignment,
+                l.radius
+            );
+        }
+        assert_eq!(loops.len(), loops_expected, "{file}");
+        assert!(loops.iter().all(|l| l.kind == LoopKind::End), "{file}");
+    }
+}
+
+#[test]
+fn oblique_ends_are_ends_and_a_missing_triangle_is_a_hole() {
+    // Shear z += x·tan 25°: both ends become planes 25° off perpendicular to the axis.
+    let mut mesh = tube3();
+    let k = 25f64.to_radians().tan();
+    for v in &mut mesh.vertices {
+        v.z += v.x * k;
+    }
+    let loops = classify_loops(&mesh, &LoopOptions::default());
+    for l in &loops {
+        println!(
+            "oblique {:?}: planarity {:.3} alignment {:.3}",
+            l.kind, l.planarity, l.wall_alignment
+        );
+    }
+    assert_eq!(loops.len(), 2);
+    assert!(loops.iter().all(|l| l.kind == LoopKind::End));
+
+    // One triangle missing from the middle of the wall.
+    let mut mesh = tube3();
+    let f = mesh.faces.len() / 2 + 7;
+    let removed = mesh.faces.remove(f);
+    let (balls, loops) = hole_regions(&mesh, &LoopOptions::default()).unwrap();
+    assert_eq!(loops.len(), 3);
+    assert_eq!(balls.len(), 1);
+    let hole = loops.iter().find(|l| l.kind == LoopKind::Hole).unwrap();
+    let mut got = hole.vertices.clone();
+    let mut want = removed.to_vec();
+    got.sort_unstable();
+    want.sort_unstable();
+    assert_eq!(got, want);
+    println!(
+        "one-triangle hole: alignment {:.3}, ball radius {:.3}",
+        hole.wall_alignment, balls[0].radius
+    );
+}
