@@ -10,4 +10,5 @@ pub mod mask;
 pub mod msr_fill;
 pub mod phantom;
 pub mod region;
+pub mod repair;
 pub mod stitch;
