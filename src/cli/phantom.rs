@@ -150,7 +150,8 @@ pub fn run(ctx: &Context, args: &PhantomArgs) -> anyhow::Result<()> {
 }
 
 /// Writes the three outputs to temporaries beside their targets, then renames them into place;
-/// on a failure, removes every temporary, so either all three appear or none.
+/// on a failure, removes every temporary. So a failed write (full disk, unwritable folder) leaves
+/// none of the three; only a rename failing after an earlier one succeeded could leave a part.
 fn write_all(
     damaged_path: &Path,
     truth_path: &Path,
