@@ -8,6 +8,7 @@ mod decompose;
 mod evolve;
 mod grid_args;
 mod info;
+mod phantom;
 mod progress;
 mod reconstruct;
 mod remesh;
@@ -60,6 +61,9 @@ pub enum Command {
     /// Rebuild a level of a multiscale representation archive, exactly from its tracked vertices
     /// or by advecting its coarsest level set back along the details.
     Reconstruct(reconstruct::ReconstructArgs),
+    /// Synthetic damaged vessel (tube, curved, bifurcation, stenosis or occlusion) with its
+    /// intact truth and the regions D covering the damage: test data for inpainting.
+    Phantom(phantom::PhantomArgs),
 }
 
 /// Global settings every command sees.
@@ -106,6 +110,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Evolve(args) => evolve::run(&ctx, &args),
         Command::Decompose(args) => decompose::run(&ctx, &args),
         Command::Reconstruct(args) => reconstruct::run(&ctx, &args),
+        Command::Phantom(args) => phantom::run(&ctx, &args),
     }
 }
 
