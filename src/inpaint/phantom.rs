@@ -458,7 +458,7 @@ fn build(kind: PhantomKind, r: f64, rng: &mut SplitMix) -> Built {
             let z0 = 0.5 * r * rng.symmetric();
             let region = Ball {
                 center: Point3::new(0.0, 0.0, z0),
-                radius: 2.5 * sigma,
+                radius: 3.0 * sigma,
             };
             let description = format!(
                 "straight tube radius {} length {}; 50% diameter stenosis (gaussian, σ = {}) with \

@@ -26,6 +26,7 @@ use crate::mesh::cap::{cap_holes, CapOptions};
 use crate::mesh::measures::{bounding_box, mean_edge_length};
 use crate::mesh::topology::EdgeMap;
 use crate::motion::diffusion::diffuse;
+use crate::motion::{Flow, FlowOptions, Velocity};
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
 use std::fmt;
@@ -40,6 +41,9 @@ pub enum InpaintMethod {
     /// `msr`: one coarse level of v = c + κ_a − κ plus the details transferred harmonically
     /// (`msr_fill`).
     Msr,
+    /// `flow`: v = c + κ_a − κ (eq. 4.2) run on φ with φ_0 restored outside D after every step:
+    /// the fill relaxes to a surface of constant mean curvature matching the intact wall.
+    Flow,
     /// `paper`: Algorithm 4 as written: repeat { coarse level (MST with v = c + κ_a − κ), details
     /// restored with viscosity ε (IMST, eq. 4.1: the details diffused for a time ε), copy φ_0
     /// outside D, ε ← ε/2 } until the zero level set in D stops moving.
@@ -48,8 +52,9 @@ pub enum InpaintMethod {
 
 impl InpaintMethod {
     /// Every method, default first.
-    pub const ALL: [InpaintMethod; 3] = [
+    pub const ALL: [InpaintMethod; 4] = [
         InpaintMethod::Axial,
+        InpaintMethod::Flow,
         InpaintMethod::Msr,
         InpaintMethod::Paper,
     ];
@@ -59,6 +64,7 @@ impl InpaintMethod {
         match self {
             InpaintMethod::Axial => "axial",
             InpaintMethod::Msr => "msr",
+            InpaintMethod::Flow => "flow",
             InpaintMethod::Paper => "paper",
         }
     }
@@ -78,7 +84,7 @@ impl FromStr for InpaintMethod {
             .find(|m| m.as_str() == s)
             .ok_or_else(|| {
                 Error::Geometry(format!(
-                    "unknown inpainting method '{s}' (expected axial, msr or paper)"
+                    "unknown inpainting method '{s}' (expected axial, flow, msr or paper)"
                 ))
             })
     }
@@ -102,6 +108,8 @@ pub struct RepairOptions {
     pub time: Option<f64>,
     /// Time steps of the coarse level (default 4).
     pub steps: usize,
+    /// Steps of `flow` (default 20).
+    pub flow_steps: usize,
     /// First viscosity ε of `paper`, world length²; default R²/8.
     pub epsilon: Option<f64>,
     /// Most iterations of `paper` (default 12).
@@ -123,6 +131,7 @@ impl Default for RepairOptions {
             speed: None,
             time: None,
             steps: 4,
+            flow_steps: 20,
             epsilon: None,
             max_iterations: 12,
             tolerance_voxels: 0.1,
@@ -217,11 +226,18 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         None => default_voxel(mean_edge_length(&closed_input), (hi - lo).max()),
     };
     // The lattice of the whole vessel (so the fallback re-mesh shares the sub-box's nodes).
-    let pad = 4.0 * h;
+    let rmax = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
+    // The fills that grow the shape (msr, paper, flow) move it by up to c·T: room for that too
+    // (R is not known yet; the region's radius bounds it from above in practice).
+    let growth = match opts.method {
+        InpaintMethod::Axial => 0.0,
+        _ => opts.speed.unwrap_or(1.0 / rmax) * opts.time.unwrap_or(rmax * rmax),
+    };
+    let margin = 0.5 * rmax + MARGIN_VOXELS * h + growth;
+    // Room for the fills that grow the shape (the sub-box is never clamped by the lattice).
+    let pad = 4.0 * h + margin + 2.0 * rmax;
     let origin = lo - Vector3::repeat(pad);
     let whole_dims = [0, 1, 2].map(|a| ((hi[a] - lo[a] + 2.0 * pad) / h).ceil() as usize + 1);
-    let rmax = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
-    let margin = 0.5 * rmax + MARGIN_VOXELS * h;
     let mut first = [usize::MAX; 3];
     let mut last = [0usize; 3];
     for b in balls {
@@ -263,6 +279,8 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         .max(h);
     let speed = opts.speed.unwrap_or(1.0 / radius_estimate);
     let time = opts.time.unwrap_or(0.5 * radius_estimate * radius_estimate);
+    let flow_speed = opts.speed.unwrap_or(0.3 / radius_estimate);
+    let flow_time = opts.time.unwrap_or(radius_estimate * radius_estimate);
     let epsilon = opts
         .epsilon
         .unwrap_or(0.125 * radius_estimate * radius_estimate);
@@ -303,6 +321,22 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
             g
         }
         InpaintMethod::Msr => fill_msr(&phi0, &unknown, &fill_opts)?.0,
+        InpaintMethod::Flow => {
+            let steps = opts.flow_steps.max(1);
+            let mut flow = Flow::new(
+                Velocity::Inpaint { c: flow_speed },
+                flow_time / steps as f64,
+                FlowOptions::default(),
+            )?;
+            let mut psi = phi0.clone();
+            iterations = steps;
+            for _ in 0..steps {
+                flow.step(&mut psi)?;
+                redistance_full(&mut psi)?;
+                blend_known(&mut psi, &phi0, &weights);
+            }
+            psi
+        }
         InpaintMethod::Paper => {
             let mut psi = phi0.clone();
             let mut eps = epsilon;
