@@ -11,8 +11,10 @@
 //!   ⅓ Σ d·area(triangle ∩ ball), computed exactly (triangle ∩ disk in the triangle's plane). On
 //!   the sphere part the integrand is the radius r, so that part is r³Ω/3 with Ω the solid angle
 //!   of the sphere inside the solid; Ω is integrated over a subdivided icosahedron whose spherical
-//!   triangles are split wherever they are near the surface, each corner classified by the
-//!   generalized winding number.
+//!   triangles are split wherever a corner is nearer the surface than the triangle is wide, each
+//!   corner classified by the generalized winding number; at the finest level the inside part of
+//!   a triangle cut by the surface is that of the linear interpolant of the corners' signed
+//!   distances.
 //! - [`local_axis`]: the vessel's direction near a point, the eigenvector of smallest eigenvalue
 //!   of the area-weighted covariance Σ A n nᵀ of the unit normals of the surface inside a ball
 //!   (a tube's normals are all perpendicular to its axis).
@@ -40,8 +42,8 @@ const SPHERE_BASE_LEVEL: usize = 3;
 const SPHERE_REFINE_DEPTH: usize = 5;
 
 /// Volume (world units³) of the solid bounded by `mesh` inside `ball` (see the module docs).
-/// Exact on the mesh's part of the boundary; the sphere's part is integrated adaptively, with a
-/// relative error of about 1e-4 for a vessel against a ball of its own size. The mesh should be
+/// Exact on the mesh's part of the boundary; the sphere's part is integrated adaptively (relative
+/// errors of 1e-6 to 1e-5 measured on a polygonal tube, a slab and a box edge and corner). The mesh should be
 /// closed (an open vessel end far from the ball does no harm: the winding number is then still
 /// near 1 inside); either orientation is accepted. Returns 0 for a ball whose radius is not
 /// positive and finite or whose centre is not finite, and for an empty mesh.
@@ -308,6 +310,11 @@ fn sphere_triangle(
         return if inside == 3 { omega() } else { 0.0 };
     }
     if depth == SPHERE_REFINE_DEPTH {
+        // Signed distances at the corners, interpolated linearly over the triangle.
+        if t.iter().all(|c| c.dist.is_finite()) {
+            let sd = t.map(|c| if c.inside { -c.dist } else { c.dist });
+            return omega() * negative_fraction(sd);
+        }
         return omega() * inside as f64 / 3.0;
     }
     let half = 0.5 * reach;
@@ -320,6 +327,25 @@ fn sphere_triangle(
         .into_iter()
         .map(|c| sphere_triangle(winding, ball, sign, c, half, depth + 1))
         .sum()
+}
+
+/// Fraction of a triangle's area where the linear interpolant of the corner values `s` is
+/// negative (zero counts as positive, as in the corners' classification).
+fn negative_fraction(s: [f64; 3]) -> f64 {
+    let neg = s.map(|v| v < 0.0);
+    let count = neg.iter().filter(|&&n| n).count();
+    if count == 0 || count == 3 {
+        return count as f64 / 3.0;
+    }
+    // The corner alone on its side cuts off a similar triangle at the zero line.
+    let lone = (0..3).find(|&i| neg[i] == (count == 1)).unwrap_or(0);
+    let (a, b, c) = (s[lone], s[(lone + 1) % 3], s[(lone + 2) % 3]);
+    let corner = (a * a / ((a - b) * (a - c))).clamp(0.0, 1.0);
+    if count == 1 {
+        corner
+    } else {
+        1.0 - corner
+    }
 }
 
 /// Direction of the vessel near `p` (unit, sign chosen so that its largest component is
@@ -651,12 +677,14 @@ pub struct StenosisReport {
 /// encloses that centroid or comes within the output's equivalent radius of it; otherwise
 /// (occlusion) its diameter is 0. The narrowest input section gives the diameter and area
 /// stenosis against the output there; the NASCET degree compares it with the mean input
-/// diameter at ± `opts.normal_offset` radii. Volumes inside the ball come from
-/// [`volume_in_ball`].
+/// diameter at ± `opts.normal_offset` radii along the axis, where both lumens are cut again
+/// perpendicular to the output's own local axis (normals within its lumen diameter), since the
+/// vessel may have turned. Volumes inside the ball come from [`volume_in_ball`].
 ///
 /// Errors with [`Error::InvalidMesh`] when either mesh has no triangle, and with
-/// [`Error::Geometry`] for a ball or options that are not positive and finite, or when the output
-/// gives no axis or no lumen in the ball.
+/// [`Error::Geometry`] for a ball or options that are not positive and finite, a ball that neither
+/// reaches the output surface nor lies inside the output, or when the output gives no axis or no
+/// lumen in the ball.
 pub fn measure_stenosis(
     input: &TriMesh,
     output: &TriMesh,
@@ -716,8 +744,15 @@ pub fn measure_stenosis_with(
         ));
     }
     let r = ball.radius;
+    let d0 = obvh.closest_point(&ball.center).distance;
+    let sign = orientation_sign(output, &ball.center);
+    if d0 > r && sign * output_winding.winding_number(&ball.center) < 0.5 {
+        return Err(Error::Geometry(format!(
+            "the ball (radius {r}) does not reach the output surface ({d0} away) and its centre is outside the vessel"
+        )));
+    }
     let axis_at = |p: &Point3<f64>| {
-        let d = obvh.closest_point(p).distance;
+        let d = obvh.closest_point(p).distance.min(r);
         local_axis(output, obvh, p, r.max(2.0 * d))
     };
     let axis0 = axis_at(&ball.center).ok_or_else(|| {
@@ -730,12 +765,12 @@ pub fn measure_stenosis_with(
     let axis = axis_at(&center).unwrap_or(axis0);
 
     // The input's lumen about the output's (or about `p` where the output has none).
-    let input_section = |p: &Point3<f64>, out: Option<&CrossSection>| {
+    let input_section = |p: &Point3<f64>, out: Option<&CrossSection>, axis: &Vector3<f64>| {
         let (q, reach) = match out {
             Some(o) => (o.centroid, 0.5 * o.equivalent_diameter),
             None => (*p, r),
         };
-        cross_section(input, &q, &axis).filter(|s| s.encloses_point || s.distance <= reach)
+        cross_section(input, &q, axis).filter(|s| s.encloses_point || s.distance <= reach)
     };
 
     let n = opts.sections;
@@ -750,7 +785,7 @@ pub fn measure_stenosis_with(
         let Some(out) = cross_section(output, &p, &axis) else {
             continue;
         };
-        let inp = input_section(&p, Some(&out));
+        let inp = input_section(&p, Some(&out), &axis);
         profile.push(SectionMeasure {
             offset: t,
             input_diameter: inp.as_ref().map_or(0.0, |s| s.equivalent_diameter),
@@ -765,12 +800,20 @@ pub fn measure_stenosis_with(
         .cloned()
         .ok_or_else(|| Error::Geometry("the output has no lumen across the ball".into()))?;
 
+    // Outside D the vessel may have turned: cut there perpendicular to the output's own axis
+    // (normals within its lumen diameter of the lumen's centroid).
     let normals: Vec<f64> = [-1.0, 1.0]
         .iter()
         .filter_map(|side| {
             let p = center + axis * (side * opts.normal_offset * r);
-            let out = cross_section(output, &p, &axis);
-            input_section(&p, out.as_ref()).map(|s| s.equivalent_diameter)
+            let Some(out) = cross_section(output, &p, &axis) else {
+                return input_section(&p, None, &axis).map(|s| s.equivalent_diameter);
+            };
+            let local = local_axis(output, obvh, &out.centroid, out.equivalent_diameter)
+                .map(|a| if a.dot(&axis) < 0.0 { -a } else { a })
+                .unwrap_or(axis);
+            let out = cross_section(output, &out.centroid, &local).unwrap_or(out);
+            input_section(&out.centroid, Some(&out), &local).map(|s| s.equivalent_diameter)
         })
         .collect();
     let normal_diameter =
