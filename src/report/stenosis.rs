@@ -366,7 +366,7 @@ pub fn local_axis(
     p: &Point3<f64>,
     radius: f64,
 ) -> Option<Vector3<f64>> {
-    if !(radius.is_finite() && radius > 0.0) || !p.iter().all(|c| c.is_finite()) {
+    if !(radius.is_finite() && radius > 0.0 && p.iter().all(|c| c.is_finite())) {
         return None;
     }
     let nv = mesh.vertices.len();
@@ -555,7 +555,7 @@ pub fn cross_section(
             }
             dist2 = dist2.min(point_segment_dist2(p, q));
         }
-        if !(a2.abs() > 0.0) || !a2.is_finite() {
+        if a2 == 0.0 || !a2.is_finite() {
             continue;
         }
         let area = 0.5 * a2.abs();
