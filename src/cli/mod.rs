@@ -12,6 +12,7 @@ mod phantom;
 mod progress;
 mod reconstruct;
 mod remesh;
+mod repair;
 mod voxelize;
 
 use clap::{Parser, Subcommand};
@@ -61,6 +62,9 @@ pub enum Command {
     /// Rebuild a level of a multiscale representation archive, exactly from its tracked vertices
     /// or by advecting its coarsest level set back along the details.
     Reconstruct(reconstruct::ReconstructArgs),
+    /// Repair damaged regions of a vessel (chopped wall, hole, narrowing, occlusion) by
+    /// inpainting; writes a watertight mesh and reports the inpainted volume and stenosis.
+    Repair(repair::RepairArgs),
     /// Synthetic damaged vessel (tube, curved, bifurcation, stenosis or occlusion) with its
     /// intact truth and the regions D covering the damage: test data for inpainting.
     Phantom(phantom::PhantomArgs),
@@ -110,6 +114,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Evolve(args) => evolve::run(&ctx, &args),
         Command::Decompose(args) => decompose::run(&ctx, &args),
         Command::Reconstruct(args) => reconstruct::run(&ctx, &args),
+        Command::Repair(args) => repair::run(&ctx, &args),
         Command::Phantom(args) => phantom::run(&ctx, &args),
     }
 }

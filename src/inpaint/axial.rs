@@ -15,8 +15,8 @@ use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
 /// Replaces `phi` at the nodes inside the union of `balls` by the axial interpolation of the
-/// module docs; node x uses the axis `axes[b]` of the ball b in which it lies deepest. Lines are
-/// marched in steps of h/2 until they leave D (or the grid: then the other end alone is used).
+/// module docs; node x uses the axis `axes[b]` of the ball b in which it lies deepest. Where a
+/// line leaves the grid before D, the other end alone is used.
 /// `phi` must be a true signed distance around D. Returns the number of nodes filled.
 pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vector3<f64>]) -> Result<usize> {
     if balls.len() != axes.len() || balls.is_empty() {
@@ -43,18 +43,31 @@ pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vector3<f64>]) -> Res
         }
         best
     };
-    let limit: f64 = 2.0 * balls.iter().map(|b| b.radius).sum::<f64>() + 4.0 * h;
     let source = phi.clone();
+    // Where the line p + s·dir (s > 0) leaves the union of the balls: jump to the far side of
+    // every ball that holds the current point until none does (exact; each jump leaves a ball
+    // for good, so at most one jump per ball).
     let exit = |p: &Point3<f64>, dir: &Vector3<f64>| -> Option<(f64, f64)> {
         let mut s = 0.0;
-        while s <= limit {
-            s += 0.5 * h;
+        for _ in 0..=balls.len() {
             let q = p + dir * s;
-            if depth(&q).0 <= 0.0 {
-                return source.sample_trilinear(&q).map(|v| (s, v));
+            let mut far = s;
+            for ball in balls {
+                let m = q - ball.center;
+                let c = m.norm_squared() - ball.radius * ball.radius;
+                if c < 0.0 {
+                    let b = m.dot(dir);
+                    far = far.max(s + (-b + (b * b - c).sqrt()));
+                }
             }
+            if far <= s {
+                break;
+            }
+            // A hair beyond the sphere, so rounding does not leave the point inside it.
+            s = far + 1e-6 * h;
         }
-        None
+        let q = p + dir * s;
+        source.sample_trilinear(&q).map(|v| (s, v))
     };
     let filled: Vec<(usize, f32)> = (0..source.data().len())
         .into_par_iter()

@@ -4,8 +4,8 @@
 //! 1. Close the input's open vessel ends (unless kept open), size the voxel h (the project's
 //!    default rule on the whole mesh, or given), and take a sub-box around D with a margin:
 //!    the cost follows the size of D, not of the vessel tree.
-//! 2. φ_0: exact signed distance of the (closed) input on the sub-box (winding-number sign, so
-//!    holes are tolerated; true distances far from the surface, which the fills compare).
+//! 2. φ_0: signed distance of the (closed) input on the sub-box (winding-number sign, so holes
+//!    are tolerated), redistanced over the whole sub-box: the fills compare true distances.
 //! 3. Fill D by one of the methods ([`InpaintMethod`]), blend the result into φ_0 over a band
 //!    inside ∂D (no seam), redistance.
 //! 4. Mesh: marching cubes of the filled φ; with `keep_outside`, stitch the part deep in D into the
@@ -21,7 +21,7 @@ use super::stitch::stitch_patch;
 use crate::grid::{spec::default_voxel, Grid3, GridTransform};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::redistance::{redistance, RedistanceOptions};
-use crate::levelset::voxelize::{voxelize, FarFill, VoxelizeOptions};
+use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
 use crate::mesh::cap::{cap_holes, CapOptions};
 use crate::mesh::measures::{bounding_box, mean_edge_length};
 use crate::mesh::topology::EdgeMap;
@@ -173,7 +173,8 @@ pub struct Repair {
     pub timings: Vec<(String, f64)>,
 }
 
-/// Sub-box margin around D beyond the balls: this many voxels plus half the largest radius.
+/// Sub-box margin around D beyond the balls, in voxels (the fills that grow the shape add half
+/// the largest radius and their growth c·T).
 const MARGIN_VOXELS: f64 = 6.0;
 /// The patch is cut this many voxels inside ∂D before it is stitched.
 const STITCH_MARGIN_VOXELS: f64 = 1.5;
@@ -233,7 +234,10 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         InpaintMethod::Axial => 0.0,
         _ => opts.speed.unwrap_or(1.0 / rmax) * opts.time.unwrap_or(rmax * rmax),
     };
-    let margin = 0.5 * rmax + MARGIN_VOXELS * h + growth;
+    let margin = match opts.method {
+        InpaintMethod::Axial => MARGIN_VOXELS * h,
+        _ => 0.5 * rmax + MARGIN_VOXELS * h + growth,
+    };
     // Room for the fills that grow the shape (the sub-box is never clamped by the lattice).
     let pad = 4.0 * h + margin + 2.0 * rmax;
     let origin = lo - Vector3::repeat(pad);
@@ -256,13 +260,13 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     }
     let sub_origin = origin + Vector3::new(first[0] as f64, first[1] as f64, first[2] as f64) * h;
     let transform = GridTransform::new(sub_origin, h);
-    let phi0 = voxelize(
-        &closed_input,
-        dims,
-        transform,
-        &VoxelizeOptions {
-            far: FarFill::Exact,
-            ..VoxelizeOptions::default()
+    let mut phi0 = voxelize(&closed_input, dims, transform, &VoxelizeOptions::default())?;
+    // True distances away from the surface too: the fills compare and interpolate them.
+    redistance(
+        &mut phi0,
+        &RedistanceOptions {
+            band: None,
+            ..RedistanceOptions::default()
         },
     )?;
     lap("voxelize", &mut timings);

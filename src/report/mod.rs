@@ -8,6 +8,7 @@ pub mod colormap;
 pub mod histogram;
 pub mod image;
 pub mod render;
+pub mod repair_report;
 pub mod stenosis;
 mod text;
 

@@ -1,0 +1,337 @@
+//! `vesselmsr repair MESH -o OUT (--region x,y,z,r | --regions FILE | --holes)`: inpaint the
+//! damaged regions D of a vessel (paper Section 4, Algorithm 4; see [`crate::inpaint::repair`]),
+//! write the repaired watertight mesh, and report the inpainted volume and the stenosis per region.
+
+use super::{print_json, progress, Context};
+use crate::inpaint::holes::{hole_regions, LoopKind, LoopOptions};
+use crate::inpaint::region::{parse_ball, read_regions, validate_regions, Ball};
+use crate::inpaint::repair::{repair, InpaintMethod, RepairOptions};
+use crate::io::{read_mesh, write_atomic, write_mesh, MeshFormat};
+use crate::mesh::info::mesh_info;
+use crate::report::repair_report::{
+    region_reports, surface_measures, RegionReport, SurfaceMeasures,
+};
+use anyhow::Context as _;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, clap::Args)]
+pub struct RepairArgs {
+    /// Input mesh (.stl, .obj or .ply), in any length unit (mm, cm, m): every length below is in
+    /// the same unit.
+    pub mesh: PathBuf,
+    /// Repaired mesh (.stl, .obj or .ply); written only if the repair succeeds.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// A region D to inpaint: the ball of centre (x, y, z) and radius r, world units. Repeatable.
+    #[arg(long, value_name = "x,y,z,r", allow_hyphen_values = true)]
+    pub region: Vec<String>,
+    /// A JSON regions file: {"regions": [{"center": [x, y, z], "radius": r}, ...], "points":
+    /// [[x, y, z], ...]}; each picked surface point becomes a ball sized from the local vessel
+    /// radius.
+    #[arg(long, value_name = "FILE.json")]
+    pub regions: Option<PathBuf>,
+    /// Every boundary loop of the input that is not an open vessel end (a near-planar loop across
+    /// the vessel) becomes a region.
+    #[arg(long)]
+    pub holes: bool,
+    /// Voxel size h of the grid around D, world units (default: the voxelize rule on the whole
+    /// mesh, min(mean edge / 2, longest side / 256)).
+    #[arg(long, value_name = "H")]
+    pub voxel: Option<f64>,
+    /// How D is filled: axial (the vessel carried across D along its axis; default), flow
+    /// (v = c + κ_a − κ with the data outside D restored), msr (a coarse level plus the details
+    /// transferred across D), paper (Algorithm 4 as written).
+    #[arg(long, default_value = "axial", value_name = "METHOD")]
+    pub method: String,
+    /// Growth speed c of v = c + κ_a − κ (flow, msr, paper), 1/length (default: from the vessel
+    /// radius R around D: 0.3/R for flow, 1/R otherwise).
+    #[arg(
+        short = 'c',
+        long = "speed",
+        value_name = "C",
+        allow_hyphen_values = true
+    )]
+    pub speed: Option<f64>,
+    /// Evolution time T of flow, msr and paper, length² (default R² for flow, R²/2 otherwise).
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub time: Option<f64>,
+    /// First viscosity ε of paper, length² (default R²/8; halved every iteration).
+    #[arg(long, value_name = "EPS", allow_hyphen_values = true)]
+    pub epsilon: Option<f64>,
+    /// Most iterations of paper (default 12).
+    #[arg(long, value_name = "N")]
+    pub max_iterations: Option<usize>,
+    /// Re-mesh the whole vessel instead of keeping the input's triangles outside D.
+    #[arg(long)]
+    pub no_keep_outside: bool,
+    /// Keep the input's open vessel ends open (for flow extensions); by default they are capped.
+    #[arg(long)]
+    pub open_ends: bool,
+    /// Write the full report as JSON to this file.
+    #[arg(long, value_name = "R.json")]
+    pub report: Option<PathBuf>,
+    /// Name of the file's length unit, used in the report (e.g. mm); coordinates are never
+    /// rescaled.
+    #[arg(long, value_name = "UNIT", default_value = "file units")]
+    pub units: String,
+}
+
+#[derive(Serialize)]
+struct MeshPart {
+    path: String,
+    #[serde(flatten)]
+    measures: SurfaceMeasures,
+}
+
+#[derive(Serialize)]
+struct LoopReport {
+    kind: &'static str,
+    center: [f64; 3],
+    radius: f64,
+    planarity: f64,
+}
+
+#[derive(Serialize)]
+struct Parameters {
+    method: &'static str,
+    voxel: f64,
+    grid_dims: [usize; 3],
+    radius_estimate: f64,
+    c: f64,
+    time: f64,
+    epsilon: f64,
+    keep_outside: bool,
+    open_ends: bool,
+    stitched: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    fallback: Option<String>,
+    axes: Vec<[f64; 3]>,
+}
+
+#[derive(Serialize)]
+struct Report {
+    units: String,
+    input: MeshPart,
+    input_capped: bool,
+    output: MeshPart,
+    regions: Vec<RegionReport>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    loops: Vec<LoopReport>,
+    watertight: bool,
+    iterations: usize,
+    converged: bool,
+    parameters: Parameters,
+    timings: serde_json::Map<String, serde_json::Value>,
+}
+
+pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    MeshFormat::from_path(&args.output)?;
+    let method: InpaintMethod = args.method.parse()?;
+    for (name, v) in [
+        ("-c/--speed", args.speed),
+        ("--time", args.time),
+        ("--epsilon", args.epsilon),
+    ] {
+        if let Some(v) = v {
+            anyhow::ensure!(v.is_finite() && v > 0.0, "{name} must be > 0, got {v}");
+        }
+    }
+    if let Some(v) = args.voxel {
+        anyhow::ensure!(
+            v.is_finite() && v > 0.0,
+            "--voxel must be a positive length, got {v}"
+        );
+    }
+    anyhow::ensure!(
+        !args.region.is_empty() || args.regions.is_some() || args.holes,
+        "no region to repair: give --region x,y,z,r, --regions FILE.json or --holes"
+    );
+    let mut balls: Vec<Ball> = Vec::new();
+    let mut sources: Vec<String> = Vec::new();
+    for text in &args.region {
+        balls.push(parse_ball(text)?);
+        sources.push("region".into());
+    }
+    let mesh = read_mesh(&args.mesh)?;
+    let read_secs = start.elapsed().as_secs_f64();
+    if let Some(path) = &args.regions {
+        for b in read_regions(path, &mesh)? {
+            balls.push(b);
+            sources.push(format!("regions file {}", path.display()));
+        }
+    }
+    let mut loops = Vec::new();
+    if args.holes {
+        let (holes, infos) = hole_regions(&mesh, &LoopOptions::default())
+            .with_context(|| format!("{}: --holes", args.mesh.display()))?;
+        for b in holes {
+            balls.push(b);
+            sources.push("hole".into());
+        }
+        loops = infos
+            .iter()
+            .map(|l| LoopReport {
+                kind: match l.kind {
+                    LoopKind::End => "open vessel end",
+                    LoopKind::Hole => "hole",
+                },
+                center: [l.center.x, l.center.y, l.center.z],
+                radius: l.radius,
+                planarity: l.planarity,
+            })
+            .collect();
+    }
+    validate_regions(&mesh, &balls).with_context(|| format!("{}", args.mesh.display()))?;
+    let opts = RepairOptions {
+        method,
+        voxel: args.voxel,
+        keep_outside: !args.no_keep_outside,
+        open_ends: args.open_ends,
+        speed: args.speed,
+        time: args.time,
+        epsilon: args.epsilon,
+        max_iterations: args
+            .max_iterations
+            .unwrap_or(RepairOptions::default().max_iterations),
+        ..RepairOptions::default()
+    };
+    let bar = progress::spinner(ctx.quiet, "repairing");
+    let result = repair(&mesh, &balls, &opts)
+        .with_context(|| format!("{}: repair failed", args.mesh.display()))?;
+    bar.set_message("measuring");
+    let measure_start = Instant::now();
+    let regions = region_reports(&result.closed_input, &result.mesh, &balls, &sources);
+    let info = mesh_info(&result.mesh);
+    let measure_secs = measure_start.elapsed().as_secs_f64();
+    let mut timings = serde_json::Map::new();
+    timings.insert("read".into(), read_secs.into());
+    for (name, secs) in &result.timings {
+        timings.insert(name.clone(), (*secs).into());
+    }
+    timings.insert("report".into(), measure_secs.into());
+    let report = Report {
+        units: args.units.clone(),
+        input: MeshPart {
+            path: args.mesh.display().to_string(),
+            measures: surface_measures(&result.closed_input),
+        },
+        input_capped: result.closed_input.num_faces() != mesh.num_faces(),
+        output: MeshPart {
+            path: args.output.display().to_string(),
+            measures: surface_measures(&result.mesh),
+        },
+        regions,
+        loops,
+        watertight: info.watertight,
+        iterations: result.iterations,
+        converged: result.converged,
+        parameters: Parameters {
+            method: method.as_str(),
+            voxel: result.voxel,
+            grid_dims: result.grid_dims,
+            radius_estimate: result.radius_estimate,
+            c: result.speed,
+            time: result.time,
+            epsilon: result.epsilon,
+            keep_outside: opts.keep_outside,
+            open_ends: opts.open_ends,
+            stitched: result.stitched,
+            fallback: result.fallback.clone(),
+            axes: result.axes.clone(),
+        },
+        timings,
+    };
+    anyhow::ensure!(
+        info.watertight || args.open_ends,
+        "{}: the repaired mesh is not watertight ({}); nothing written",
+        args.mesh.display(),
+        info.leaks().join(", ")
+    );
+    let text = serde_json::to_string_pretty(&report)?;
+    write_mesh(&args.output, &result.mesh)?;
+    if let Some(path) = &args.report {
+        write_atomic(path, |out| {
+            out.write_all(text.as_bytes())
+                .and_then(|_| out.write_all(b"\n"))
+                .map_err(|e| crate::Error::io(path, e))
+        })?;
+    }
+    bar.finish_and_clear();
+    if !ctx.quiet {
+        if let Some(why) = &result.fallback {
+            eprintln!(
+                "vesselmsr: notice: the patch could not be stitched into the kept triangles ({why}); the whole vessel was re-meshed"
+            );
+        }
+    }
+    if ctx.json {
+        return print_json(&report);
+    }
+    print_summary(&report, start.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn print_summary(r: &Report, secs: f64) {
+    let u = &r.units;
+    let v = |x: f64| format!("{x:.4} {u}³");
+    println!(
+        "input   {}: volume {}{}",
+        r.input.path,
+        v(r.input.measures.volume),
+        if r.input_capped {
+            " (open ends capped)"
+        } else {
+            ""
+        }
+    );
+    println!(
+        "output  {}: volume {}, {}, {} component(s), {}",
+        r.output.path,
+        v(r.output.measures.volume),
+        if r.watertight {
+            "watertight"
+        } else {
+            "NOT watertight"
+        },
+        r.output.measures.components,
+        if r.parameters.stitched {
+            "new patch stitched into the original triangles outside D"
+        } else {
+            "whole vessel re-meshed"
+        }
+    );
+    for (k, g) in r.regions.iter().enumerate() {
+        let pct = |p: Option<f64>| p.map_or("n/a".to_string(), |p| format!("{p:.1}%"));
+        println!(
+            "region {} ({:.4}, {:.4}, {:.4}) radius {:.4}: inpainted {} ({:.2}% of the output); stenosis: diameter {}, area {}, NASCET {}",
+            k + 1,
+            g.center[0],
+            g.center[1],
+            g.center[2],
+            g.radius,
+            v(g.inpainted_volume),
+            100.0 * g.inpainted_fraction,
+            pct(g.diameter_stenosis_pct),
+            pct(g.area_stenosis_pct),
+            pct(g.nascet_stenosis_pct)
+        );
+    }
+    for l in &r.loops {
+        println!(
+            "loop at ({:.4}, {:.4}, {:.4}) radius {:.4}: {}",
+            l.center[0], l.center[1], l.center[2], l.radius, l.kind
+        );
+    }
+    println!(
+        "method {}, voxel {:.4} {u}, vessel radius ≈ {:.4} {u}, {} iteration(s){}, {:.1} s",
+        r.parameters.method,
+        r.parameters.voxel,
+        r.parameters.radius_estimate,
+        r.iterations,
+        if r.converged { "" } else { " (not converged)" },
+        secs
+    );
+}
