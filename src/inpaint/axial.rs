@@ -15,10 +15,11 @@ use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
 /// Replaces `phi` at the nodes inside the union of `balls` by the axial interpolation of the
-/// module docs; node x uses the axis `axes[b]` of the ball b in which it lies deepest. Where a
-/// line leaves the grid before D, the other end alone is used.
+/// module docs; node x uses the candidate axes `axes[b]` of the ball b in which it lies deepest,
+/// and of those the one whose two line ends disagree least (several candidates: the branches of a
+/// junction). Where a line leaves the grid before D, the other end alone is used.
 /// `phi` must be a true signed distance around D. Returns the number of nodes filled.
-pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vector3<f64>]) -> Result<usize> {
+pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vec<Vector3<f64>>]) -> Result<usize> {
     if balls.len() != axes.len() || balls.is_empty() {
         return Err(Error::Geometry(format!(
             "axial fill: {} balls and {} axes",
@@ -26,10 +27,20 @@ pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vector3<f64>]) -> Res
             axes.len()
         )));
     }
-    let axes: Vec<Vector3<f64>> = axes
+    let axes: Vec<Vec<Vector3<f64>>> = axes
         .iter()
-        .map(|a| a.try_normalize(1e-12).unwrap_or(Vector3::z()))
+        .map(|list| {
+            list.iter()
+                .filter_map(|a| a.try_normalize(1e-12))
+                .collect::<Vec<_>>()
+        })
         .collect();
+    if let Some(b) = axes.iter().position(|list| list.is_empty()) {
+        return Err(Error::Geometry(format!(
+            "axial fill: no axis for region {}",
+            b + 1
+        )));
+    }
     let [nx, ny, _] = phi.dims();
     let t = *phi.transform();
     let h = phi.voxel();
@@ -78,11 +89,24 @@ pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vector3<f64>]) -> Res
             if d <= 0.0 {
                 return None;
             }
-            let a = axes[b];
-            let value = match (exit(&p, &a), exit(&p, &-a)) {
-                (Some((tp, vp)), Some((tm, vm))) => (tm * vp + tp * vm) / (tp + tm),
-                (Some((_, v)), None) | (None, Some((_, v))) => v,
-                (None, None) => return Some((n, source.data()[n])),
+            // Each candidate axis gives a value; the line whose two ends agree best runs along
+            // a vessel (on a straight tube they agree exactly).
+            let mut best: Option<(f64, f64)> = None;
+            for a in &axes[b] {
+                let (value, disagreement) = match (exit(&p, a), exit(&p, &-a)) {
+                    (Some((tp, vp)), Some((tm, vm))) => {
+                        ((tm * vp + tp * vm) / (tp + tm), (vp - vm).abs())
+                    }
+                    (Some((_, v)), None) | (None, Some((_, v))) => (v, f64::INFINITY),
+                    (None, None) => continue,
+                };
+                if best.is_none_or(|(_, d)| disagreement < d) {
+                    best = Some((value, disagreement));
+                }
+            }
+            let value = match best {
+                Some((v, _)) => v,
+                None => return Some((n, source.data()[n])),
             };
             Some((n, value as f32))
         })

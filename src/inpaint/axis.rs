@@ -36,3 +36,46 @@ pub fn estimate_axis(mesh: &TriMesh, ball: &Ball, shell: f64) -> Option<Vector3<
     let k = eig.eigenvalues.imin();
     Some(eig.eigenvectors.column(k).into_owned().normalize())
 }
+
+/// The axes of the vessel branches that cross ∂D: the boundary loops that removing the triangles
+/// with a vertex in D leaves in `mesh` (those within `reach` of D), each taken as a cross-section
+/// of a branch, whose axis is the normal of the loop's best-fit plane (the eigenvector of the
+/// smallest eigenvalue of the loop vertices' covariance).
+pub fn branch_axes(mesh: &TriMesh, balls: &[Ball], reach: f64) -> Vec<Vector3<f64>> {
+    let inside: Vec<bool> = mesh
+        .vertices
+        .iter()
+        .map(|p| balls.iter().any(|b| b.contains(p)))
+        .collect();
+    let kept = TriMesh::new(
+        mesh.vertices.clone(),
+        mesh.faces
+            .iter()
+            .filter(|f| f.iter().all(|&v| !inside[v as usize]))
+            .copied()
+            .collect(),
+    );
+    let near = |p: &nalgebra::Point3<f64>| {
+        balls
+            .iter()
+            .any(|b| (p - b.center).norm() < b.radius + reach)
+    };
+    crate::mesh::topology::boundary_loops(&kept)
+        .into_iter()
+        .filter(|lp| lp.len() >= 3 && lp.iter().all(|&v| near(&kept.vertices[v as usize])))
+        .filter_map(|lp| {
+            let n = lp.len() as f64;
+            let c = lp.iter().fold(Vector3::zeros(), |s, &v| {
+                s + kept.vertices[v as usize].coords
+            }) / n;
+            let mut cov = Matrix3::zeros();
+            for &v in &lp {
+                let d = kept.vertices[v as usize].coords - c;
+                cov += d * d.transpose();
+            }
+            let eig = SymmetricEigen::new(cov);
+            let k = eig.eigenvalues.imin();
+            eig.eigenvectors.column(k).into_owned().try_normalize(1e-12)
+        })
+        .collect()
+}

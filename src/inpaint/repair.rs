@@ -13,7 +13,7 @@
 //!    vessel with the filled sub-box. Check that the output is closed where the input was.
 
 use super::axial::fill_axial;
-use super::axis::estimate_axis;
+use super::axis::{branch_axes, estimate_axis};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{coarse_level, fill_msr, MsrFillOptions};
 use super::region::Ball;
@@ -310,6 +310,10 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     let mut converged = true;
     let mut psi = match opts.method {
         InpaintMethod::Axial => {
+            // A junction in D (three or more branches cross ∂D): each branch's axis is a
+            // candidate; otherwise the axis of the intact surface around each ball.
+            let branches = branch_axes(&closed_input, balls, 2.0 * mean_edge_length(&closed_input));
+            let mut candidates = Vec::new();
             for b in balls {
                 let a = estimate_axis(&closed_input, b, 2.0).ok_or_else(|| {
                     Error::Geometry(format!(
@@ -318,10 +322,14 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
                     ))
                 })?;
                 axes.push([a.x, a.y, a.z]);
+                let mut list = vec![a];
+                if branches.len() >= 3 {
+                    list.extend(branches.iter().copied());
+                }
+                candidates.push(list);
             }
-            let axis_vectors: Vec<Vector3<f64>> = axes.iter().map(|a| Vector3::from(*a)).collect();
             let mut g = phi0.clone();
-            fill_axial(&mut g, balls, &axis_vectors)?;
+            fill_axial(&mut g, balls, &candidates)?;
             g
         }
         InpaintMethod::Msr => fill_msr(&phi0, &unknown, &fill_opts)?.0,

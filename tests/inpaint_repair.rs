@@ -1,0 +1,381 @@
+//! Vessel repair (issue: inpainting) on the phantoms with known truth: accuracy inside D against
+//! the truth, watertightness (ours and manifold3d's verdict), the triangles outside D kept as they
+//! were, the report's figures, and bad input through the command line.
+
+mod common;
+
+use common::{assert_fails, oracle, vesselmsr, vesselmsr_json};
+use nalgebra::Point3;
+use std::collections::HashSet;
+use vesselmsr::bvh::MeshBvh;
+use vesselmsr::inpaint::phantom::{make_phantom, Phantom, PhantomKind, PhantomOptions};
+use vesselmsr::inpaint::region::Ball;
+use vesselmsr::inpaint::repair::{repair, InpaintMethod, Repair, RepairOptions};
+use vesselmsr::mesh::distance::sample_surface;
+use vesselmsr::mesh::info::mesh_info;
+use vesselmsr::mesh::topology::connected_components;
+use vesselmsr::report::stenosis::volume_in_ball;
+use vesselmsr::TriMesh;
+
+fn phantom(kind: PhantomKind) -> Phantom {
+    make_phantom(kind, &PhantomOptions::default()).unwrap()
+}
+
+/// Repairs a phantom at its own voxel size with `method`.
+fn repaired(ph: &Phantom, method: InpaintMethod) -> Repair {
+    let opts = RepairOptions {
+        method,
+        voxel: Some(ph.voxel),
+        ..RepairOptions::default()
+    };
+    repair(&ph.damaged, &ph.regions, &opts).unwrap()
+}
+
+fn in_regions(balls: &[Ball], p: &Point3<f64>) -> bool {
+    balls.iter().any(|b| b.contains(p))
+}
+
+/// Symmetric Hausdorff distance between the parts of `a` and `b` inside D (area samples of each
+/// inside D against the whole other surface).
+fn hausdorff_in(a: &TriMesh, b: &TriMesh, balls: &[Ball]) -> f64 {
+    let one_way = |x: &TriMesh, y: &TriMesh| {
+        let bvh = MeshBvh::new(y);
+        sample_surface(x, 60_000)
+            .iter()
+            .chain(&x.vertices)
+            .filter(|p| in_regions(balls, p))
+            .map(|p| (p - bvh.closest_point(p).point).norm())
+            .fold(0.0, f64::max)
+    };
+    one_way(a, b).max(one_way(b, a))
+}
+
+/// (Output − truth) volume inside D over the truth's volume inside D.
+fn volume_error_in(output: &TriMesh, truth: &TriMesh, balls: &[Ball]) -> f64 {
+    let (o, t): (f64, f64) = balls
+        .iter()
+        .map(|b| (volume_in_ball(output, b), volume_in_ball(truth, b)))
+        .fold((0.0, 0.0), |s, v| (s.0 + v.0, s.1 + v.1));
+    (o - t) / t
+}
+
+/// Every triangle of `input` with all three vertices outside D is in `output`, same coordinates.
+fn assert_outside_kept(input: &TriMesh, output: &TriMesh, balls: &[Ball]) {
+    let key = |m: &TriMesh, f: &[u32; 3]| {
+        let mut k: Vec<[u64; 3]> = f
+            .iter()
+            .map(|&v| m.vertices[v as usize].coords.map(f64::to_bits).into())
+            .map(|c: nalgebra::Vector3<u64>| [c.x, c.y, c.z])
+            .collect();
+        let min = (0..3).min_by_key(|&i| k[i]).unwrap();
+        k.rotate_left(min);
+        k
+    };
+    let have: HashSet<Vec<[u64; 3]>> = output.faces.iter().map(|f| key(output, f)).collect();
+    let mut kept = 0;
+    for f in &input.faces {
+        if f.iter()
+            .all(|&v| !in_regions(balls, &input.vertices[v as usize]))
+        {
+            assert!(
+                have.contains(&key(input, f)),
+                "a triangle outside D changed"
+            );
+            kept += 1;
+        }
+    }
+    assert!(kept > 0);
+}
+
+#[test]
+fn phantoms_are_restored_within_the_acceptance_bounds() {
+    // (kind, Hausdorff bound in h, volume error bound)
+    let cases = [
+        (PhantomKind::Tube, 1.5, 0.05),
+        (PhantomKind::Stenosis, 1.5, 0.05),
+        (PhantomKind::Occlusion, 1.5, 0.05),
+    ];
+    for (kind, hd_bound, vol_bound) in cases {
+        let ph = phantom(kind);
+        let r = repaired(&ph, InpaintMethod::Axial);
+        let hd = hausdorff_in(&r.mesh, &ph.truth, &ph.regions) / ph.voxel;
+        let ve = volume_error_in(&r.mesh, &ph.truth, &ph.regions);
+        let damaged_ve = volume_error_in(&ph.damaged, &ph.truth, &ph.regions);
+        println!(
+            "{}: Hausdorff in D {hd:.2}h, volume error in D {:+.2}% (damaged {:+.1}%), stitched {}",
+            kind.as_str(),
+            100.0 * ve,
+            100.0 * damaged_ve,
+            r.stitched
+        );
+        assert!(hd <= hd_bound, "{}: Hausdorff {hd}h", kind.as_str());
+        assert!(
+            ve.abs() <= vol_bound,
+            "{}: volume error {ve}",
+            kind.as_str()
+        );
+        assert!(mesh_info(&r.mesh).watertight);
+        assert_eq!(connected_components(&r.mesh).0, 1);
+        assert!(r.stitched, "{}: {:?}", kind.as_str(), r.fallback);
+        assert_outside_kept(&ph.damaged, &r.mesh, &ph.regions);
+    }
+}
+
+#[test]
+fn curved_gap_is_bridged_into_one_tube() {
+    let ph = phantom(PhantomKind::Curved);
+    assert_eq!(connected_components(&ph.damaged).0, 2);
+    let r = repaired(&ph, InpaintMethod::Axial);
+    let ve = volume_error_in(&r.mesh, &ph.truth, &ph.regions);
+    let hd = hausdorff_in(&r.mesh, &ph.truth, &ph.regions) / ph.voxel;
+    println!(
+        "curved: volume error in D {:+.2}%, Hausdorff in D {hd:.2}h",
+        100.0 * ve
+    );
+    assert_eq!(connected_components(&r.mesh).0, 1);
+    assert!(ve.abs() <= 0.10, "volume error {ve}");
+    assert!(mesh_info(&r.mesh).watertight);
+    assert_outside_kept(&ph.damaged, &r.mesh, &ph.regions);
+}
+
+#[test]
+fn bifurcation_and_every_method_give_a_closed_outward_vessel() {
+    // Accuracy at the carina is not met yet (see the inpaint bench); closedness is.
+    let ph = phantom(PhantomKind::Bifurcation);
+    let r = repaired(&ph, InpaintMethod::Axial);
+    let info = mesh_info(&r.mesh);
+    assert!(info.watertight && info.signed_volume > 0.0);
+    assert_eq!(connected_components(&r.mesh).0, 1);
+    let tube = phantom(PhantomKind::Tube);
+    for method in InpaintMethod::ALL {
+        let r = repaired(&tube, method);
+        let info = mesh_info(&r.mesh);
+        let ve = volume_error_in(&r.mesh, &tube.truth, &tube.regions);
+        println!(
+            "tube, {method}: volume error in D {:+.1}%, {} iterations",
+            100.0 * ve,
+            r.iterations
+        );
+        assert!(info.watertight && info.signed_volume > 0.0, "{method}");
+        // The fills that carry data across D or grow the shape add volume back into the chopped
+        // wall; Algorithm 4 as written only smooths it (its viscosity is a curvature motion),
+        // as ../shared/notes/inpainting.md measured.
+        let damaged = volume_error_in(&tube.damaged, &tube.truth, &tube.regions);
+        if method != InpaintMethod::Paper {
+            assert!(ve > damaged, "{method}: {ve} vs damaged {damaged}");
+        }
+    }
+}
+
+#[test]
+fn cli_repairs_the_stenosis_phantom_and_reports_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |n: &str| tmp.path().join(n).to_string_lossy().into_owned();
+    let made = vesselmsr(&[
+        "phantom",
+        "stenosis",
+        "-o",
+        &p("d.stl"),
+        "--truth",
+        &p("t.stl"),
+        "--regions-out",
+        &p("d.json"),
+        "-q",
+    ]);
+    assert!(made.status.success());
+    let report = vesselmsr_json(&[
+        "repair",
+        &p("d.stl"),
+        "--regions",
+        &p("d.json"),
+        "-o",
+        &p("out.stl"),
+        "--voxel",
+        "0.375",
+        "--report",
+        &p("r.json"),
+        "--units",
+        "mm",
+        "--json",
+        "-q",
+    ]);
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("r.json")).unwrap()).unwrap();
+    assert_eq!(file, report, "the report file is what --json prints");
+    for key in [
+        "input",
+        "output",
+        "regions",
+        "watertight",
+        "iterations",
+        "converged",
+        "parameters",
+        "timings",
+    ] {
+        assert!(report.get(key).is_some(), "report lacks {key}");
+    }
+    assert_eq!(report["watertight"], true);
+    assert_eq!(report["units"], "mm");
+    let region = &report["regions"][0];
+    for key in [
+        "center",
+        "radius",
+        "inpainted_volume",
+        "inpainted_fraction",
+        "diameter_stenosis_pct",
+        "area_stenosis_pct",
+        "nascet_stenosis_pct",
+    ] {
+        assert!(region.get(key).is_some(), "region lacks {key}");
+    }
+    let pct = region["diameter_stenosis_pct"].as_f64().unwrap();
+    println!(
+        "stenosis phantom: diameter stenosis {pct:.1}%, area {}",
+        region["area_stenosis_pct"]
+    );
+    assert!((pct - 50.0).abs() <= 5.0, "diameter stenosis {pct}");
+    // The inpainted volume is what the damage took away (truth − damaged in D).
+    let ph = phantom(PhantomKind::Stenosis);
+    let ball = ph.regions[0];
+    let truth_in_d = volume_in_ball(&ph.truth, &ball);
+    let removed = truth_in_d - volume_in_ball(&ph.damaged, &ball);
+    let inpainted = region["inpainted_volume"].as_f64().unwrap();
+    assert!(
+        (inpainted - removed).abs() <= 0.05 * truth_in_d,
+        "{inpainted} vs {removed}"
+    );
+    let fraction = region["inpainted_fraction"].as_f64().unwrap();
+    let total = report["output"]["volume"].as_f64().unwrap();
+    assert!((fraction - inpainted / total).abs() < 1e-9);
+    // manifold3d's verdict on the written mesh.
+    let check = oracle().check(std::path::Path::new(&p("out.stl")));
+    assert_eq!(check["manifold_status"], "NoError", "{check}");
+}
+
+#[test]
+fn cli_holes_and_open_ends() {
+    // A wall patch cut from the shipped open-ended aorta: --holes finds it, the two ends stay
+    // vessel ends; with --open-ends only those stay open.
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |n: &str| tmp.path().join(n).to_string_lossy().into_owned();
+    let mut mesh = vesselmsr::io::read_mesh(std::path::Path::new(&common::aorta())).unwrap();
+    let info = mesh_info(&mesh);
+    let c = Point3::from(
+        (nalgebra::Vector3::from(info.bbox_min) + nalgebra::Vector3::from(info.bbox_max)) / 2.0,
+    );
+    let bvh = MeshBvh::new(&mesh);
+    let wall = bvh.closest_point(&c).point;
+    let cut = 1.5 * info.mean_edge;
+    mesh.faces.retain(|f| {
+        f.iter()
+            .all(|&v| (mesh.vertices[v as usize] - wall).norm() > cut)
+    });
+    let holed = p("holed.stl");
+    vesselmsr::io::write_mesh(std::path::Path::new(&holed), &mesh).unwrap();
+    let loops_before = mesh_info(&mesh).boundary_loops;
+    let report = vesselmsr_json(&[
+        "repair",
+        &holed,
+        "--holes",
+        "-o",
+        &p("out.stl"),
+        "--json",
+        "-q",
+    ]);
+    let kinds: Vec<&str> = report["loops"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["kind"].as_str().unwrap())
+        .collect();
+    println!("loops: {kinds:?}");
+    assert_eq!(kinds.iter().filter(|k| **k == "hole").count(), 1);
+    assert_eq!(kinds.len(), loops_before);
+    assert_eq!(report["watertight"], true);
+    let open = vesselmsr_json(&[
+        "repair",
+        &holed,
+        "--holes",
+        "--open-ends",
+        "-o",
+        &p("open.stl"),
+        "--json",
+        "-q",
+    ]);
+    let out = vesselmsr::io::read_mesh(std::path::Path::new(&p("open.stl"))).unwrap();
+    assert_eq!(
+        mesh_info(&out).boundary_loops,
+        loops_before - 1,
+        "{}",
+        open["output"]
+    );
+}
+
+#[test]
+fn cli_bad_input_exits_2_without_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = |n: &str| tmp.path().join(n).to_string_lossy().into_owned();
+    let out = tmp.path().join("out.stl");
+    let o = out.to_string_lossy().into_owned();
+    let aorta = common::aorta();
+    let closed = p("closed.stl");
+    assert!(vesselmsr(&["cap", &aorta, "-o", &closed]).status.success());
+    std::fs::write(p("bad.json"), "{\"regions\": [{\"centre\": [0,0,0]}]}").unwrap();
+    std::fs::write(p("garbage.json"), "not json").unwrap();
+    let (bad, garbage, missing) = (p("bad.json"), p("garbage.json"), p("missing.json"));
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["repair", &aorta, "-o", &o, "--region", "1e6,1e6,1e6,1"],
+            "region 1",
+        ),
+        (
+            vec!["repair", &aorta, "-o", &o, "--region", "0,0,0,0"],
+            "radius",
+        ),
+        (
+            vec!["repair", &aorta, "-o", &o, "--region", "0,0,0,-2"],
+            "radius",
+        ),
+        (
+            vec!["repair", &aorta, "-o", &o, "--region", "1,2,3"],
+            "x,y,z,r",
+        ),
+        (
+            vec!["repair", &closed, "-o", &o, "--holes"],
+            "no boundary loops",
+        ),
+        (vec!["repair", &aorta, "-o", &o, "--holes"], "no holes"),
+        (
+            vec!["repair", &aorta, "-o", &o, "--regions", &bad],
+            "bad.json",
+        ),
+        (
+            vec!["repair", &aorta, "-o", &o, "--regions", &garbage],
+            "garbage.json",
+        ),
+        (
+            vec!["repair", &aorta, "-o", &o, "--regions", &missing],
+            "missing.json",
+        ),
+        (vec!["repair", &aorta, "-o", &o], "no region"),
+        (
+            vec!["repair", &aorta, "-o", &o, "--region", "0,0,0,5", "-c", "0"],
+            "speed",
+        ),
+        (
+            vec![
+                "repair", &aorta, "-o", &o, "--region", "0,0,0,5", "-c", "-1",
+            ],
+            "speed",
+        ),
+        (
+            vec![
+                "repair", &aorta, "-o", &o, "--region", "0,0,0,5", "--method", "magic",
+            ],
+            "magic",
+        ),
+    ];
+    for (args, word) in &cases {
+        assert_fails(args, word, &out);
+    }
+}
