@@ -16,8 +16,8 @@ use rayon::prelude::*;
 
 /// Replaces `phi` at the nodes inside the union of `balls` by the axial interpolation of the
 /// module docs; node x uses the candidate axes `axes[b]` of the ball b in which it lies deepest,
-/// and of those the one whose two line ends disagree least (several candidates: the branches of a
-/// junction). Where a line leaves the grid before D, the other end alone is used.
+/// and of those the one whose two line ends disagree least, lines with both ends on the same side
+/// of the surface first (several candidates: the branches of a junction). Where a line leaves the grid before D, the other end alone is used.
 /// `phi` must be a true signed distance around D. Returns the number of nodes filled.
 pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vec<Vector3<f64>>]) -> Result<usize> {
     if balls.len() != axes.len() || balls.is_empty() {
@@ -91,17 +91,19 @@ pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vec<Vector3<f64>>]) -
             }
             // Each candidate axis gives a value; the line whose two ends agree best runs along
             // a vessel (on a straight tube they agree exactly).
-            let mut best: Option<(f64, f64)> = None;
+            // Lines whose ends lie on the same side of the surface come first.
+            let mut best: Option<(f64, (bool, f64))> = None;
             for a in &axes[b] {
-                let (value, disagreement) = match (exit(&p, a), exit(&p, &-a)) {
-                    (Some((tp, vp)), Some((tm, vm))) => {
-                        ((tm * vp + tp * vm) / (tp + tm), (vp - vm).abs())
-                    }
-                    (Some((_, v)), None) | (None, Some((_, v))) => (v, f64::INFINITY),
+                let (value, rank) = match (exit(&p, a), exit(&p, &-a)) {
+                    (Some((tp, vp)), Some((tm, vm))) => (
+                        (tm * vp + tp * vm) / (tp + tm),
+                        ((vp < 0.0) != (vm < 0.0), (vp - vm).abs()),
+                    ),
+                    (Some((_, v)), None) | (None, Some((_, v))) => (v, (true, f64::INFINITY)),
                     (None, None) => continue,
                 };
-                if best.is_none_or(|(_, d)| disagreement < d) {
-                    best = Some((value, disagreement));
+                if best.is_none_or(|(_, r)| rank < r) {
+                    best = Some((value, rank));
                 }
             }
             let value = match best {

@@ -1,11 +1,14 @@
-//! The vessel axis at a region D, estimated from the intact surface around it: on a tube every
-//! surface normal is perpendicular to the axis, so the axis is the direction least represented
-//! among the normals, the eigenvector of the smallest eigenvalue of the area-weighted normal
-//! covariance Σ A n nᵀ of the triangles in a shell just outside the ball.
+//! The vessel axis at a region D, estimated from the intact surface around it. Where a vessel
+//! crosses ∂D its surface leaves a boundary loop once D is cut out (`branch_crossings`): a tube
+//! through D leaves two, and the chord between their centroids is its axis across D; a junction
+//! leaves three or more, each with its own axis. A chopped wall leaves one; there the axis is the
+//! direction least represented among the surface normals (on a tube every normal is
+//! perpendicular to the axis): the eigenvector of the smallest eigenvalue of the area-weighted
+//! normal covariance Σ A n nᵀ of the triangles in a shell just outside the ball (`estimate_axis`).
 
 use super::region::Ball;
 use crate::TriMesh;
-use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 
 /// The axis direction (unit, sign arbitrary) of the vessel through `ball`, from the triangles
 /// whose centroid lies between 1 and `shell` ball radii from its centre (`shell` > 1). None when
@@ -15,7 +18,7 @@ pub fn estimate_axis(mesh: &TriMesh, ball: &Ball, shell: f64) -> Option<Vector3<
     let mut found = false;
     for f in 0..mesh.num_faces() {
         let [a, b, c] = mesh.triangle(f);
-        let centroid = nalgebra::Point3::from((a.coords + b.coords + c.coords) / 3.0);
+        let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
         let r = (centroid - ball.center).norm() / ball.radius;
         if !(1.0..=shell).contains(&r) {
             continue;
@@ -37,11 +40,22 @@ pub fn estimate_axis(mesh: &TriMesh, ball: &Ball, shell: f64) -> Option<Vector3<
     Some(eig.eigenvectors.column(k).into_owned().normalize())
 }
 
-/// The axes of the vessel branches that cross ∂D: the boundary loops that removing the triangles
-/// with a vertex in D leaves in `mesh` (those within `reach` of D), each taken as a cross-section
-/// of a branch, whose axis is the normal of the loop's best-fit plane (the eigenvector of the
-/// smallest eigenvalue of the loop vertices' covariance).
-pub fn branch_axes(mesh: &TriMesh, balls: &[Ball], reach: f64) -> Vec<Vector3<f64>> {
+/// A branch of the vessel where it crosses ∂D.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BranchCrossing {
+    /// Centroid of the boundary loop, world units.
+    pub center: Point3<f64>,
+    /// Normal of the loop's best-fit plane (unit; sign arbitrary): the branch's axis there.
+    pub axis: Vector3<f64>,
+    /// The ball of D the loop is nearest to (index into the balls).
+    pub ball: usize,
+}
+
+/// The branches of the vessel that cross ∂D: the boundary loops that removing the triangles with
+/// a vertex in D leaves in `mesh` (those within `reach` of D), each a cross-section of a branch
+/// whose axis is the normal of the loop's best-fit plane (the eigenvector of the smallest
+/// eigenvalue of the loop vertices' covariance).
+pub fn branch_crossings(mesh: &TriMesh, balls: &[Ball], reach: f64) -> Vec<BranchCrossing> {
     let inside: Vec<bool> = mesh
         .vertices
         .iter()
@@ -55,14 +69,17 @@ pub fn branch_axes(mesh: &TriMesh, balls: &[Ball], reach: f64) -> Vec<Vector3<f6
             .copied()
             .collect(),
     );
-    let near = |p: &nalgebra::Point3<f64>| {
-        balls
-            .iter()
-            .any(|b| (p - b.center).norm() < b.radius + reach)
-    };
+    let gap = |p: &Point3<f64>, b: &Ball| (p - b.center).norm() - b.radius;
     crate::mesh::topology::boundary_loops(&kept)
         .into_iter()
-        .filter(|lp| lp.len() >= 3 && lp.iter().all(|&v| near(&kept.vertices[v as usize])))
+        .filter(|lp| {
+            lp.len() >= 3
+                && lp.iter().all(|&v| {
+                    balls
+                        .iter()
+                        .any(|b| gap(&kept.vertices[v as usize], b) < reach)
+                })
+        })
         .filter_map(|lp| {
             let n = lp.len() as f64;
             let c = lp.iter().fold(Vector3::zeros(), |s, &v| {
@@ -75,7 +92,15 @@ pub fn branch_axes(mesh: &TriMesh, balls: &[Ball], reach: f64) -> Vec<Vector3<f6
             }
             let eig = SymmetricEigen::new(cov);
             let k = eig.eigenvalues.imin();
-            eig.eigenvectors.column(k).into_owned().try_normalize(1e-12)
+            let axis = eig
+                .eigenvectors
+                .column(k)
+                .into_owned()
+                .try_normalize(1e-12)?;
+            let center = Point3::from(c);
+            let ball = (0..balls.len())
+                .min_by(|&a, &b| gap(&center, &balls[a]).total_cmp(&gap(&center, &balls[b])))?;
+            Some(BranchCrossing { center, axis, ball })
         })
         .collect()
 }

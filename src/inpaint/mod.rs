@@ -12,3 +12,4 @@ pub mod phantom;
 pub mod region;
 pub mod repair;
 pub mod stitch;
+pub mod topology;

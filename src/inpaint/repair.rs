@@ -7,17 +7,19 @@
 //! 2. φ_0: signed distance of the (closed) input on the sub-box (winding-number sign, so holes
 //!    are tolerated), redistanced over the whole sub-box: the fills compare true distances.
 //! 3. Fill D by one of the methods ([`InpaintMethod`]), blend the result into φ_0 over a band
-//!    inside ∂D (no seam), redistance.
+//!    inside ∂D (no seam), remove pieces that float in D or voids sealed in it (`topology`),
+//!    redistance.
 //! 4. Mesh: marching cubes of the filled φ; with `keep_outside`, stitch the part deep in D into the
 //!    input's triangles outside D; when that fails (or without `keep_outside`), re-mesh the whole
 //!    vessel with the filled sub-box. Check that the output is closed where the input was.
 
 use super::axial::fill_axial;
-use super::axis::{branch_axes, estimate_axis};
+use super::axis::{branch_crossings, estimate_axis};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{coarse_level, fill_msr, MsrFillOptions};
 use super::region::Ball;
 use super::stitch::stitch_patch;
+use super::topology::remove_islands;
 use crate::grid::{spec::default_voxel, Grid3, GridTransform};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::redistance::{redistance, RedistanceOptions};
@@ -310,22 +312,27 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     let mut converged = true;
     let mut psi = match opts.method {
         InpaintMethod::Axial => {
-            // A junction in D (three or more branches cross ∂D): each branch's axis is a
-            // candidate; otherwise the axis of the intact surface around each ball.
-            let branches = branch_axes(&closed_input, balls, 2.0 * mean_edge_length(&closed_input));
+            // Per ball: a tube through it (two crossings) takes the chord between them; a
+            // junction (three or more) tries each branch's axis; otherwise (a chopped wall) the
+            // axis of the intact surface around the ball.
+            let crossings =
+                branch_crossings(&closed_input, balls, 2.0 * mean_edge_length(&closed_input));
             let mut candidates = Vec::new();
-            for b in balls {
-                let a = estimate_axis(&closed_input, b, 2.0).ok_or_else(|| {
-                    Error::Geometry(format!(
-                        "no surface around the region at {} (radius {}) to take the vessel axis from",
-                        b.center, b.radius
-                    ))
-                })?;
-                axes.push([a.x, a.y, a.z]);
-                let mut list = vec![a];
-                if branches.len() >= 3 {
-                    list.extend(branches.iter().copied());
-                }
+            for (k, b) in balls.iter().enumerate() {
+                let mine: Vec<_> = crossings.iter().filter(|c| c.ball == k).collect();
+                let list = match mine.len() {
+                    2 => vec![(mine[1].center - mine[0].center)
+                        .try_normalize(1e-12)
+                        .unwrap_or(mine[0].axis)],
+                    n if n >= 3 => mine.iter().map(|c| c.axis).collect(),
+                    _ => vec![estimate_axis(&closed_input, b, 2.0).ok_or_else(|| {
+                        Error::Geometry(format!(
+                            "no surface around the region at {} (radius {}) to take the vessel axis from",
+                            b.center, b.radius
+                        ))
+                    })?],
+                };
+                axes.push([list[0].x, list[0].y, list[0].z]);
                 candidates.push(list);
             }
             let mut g = phi0.clone();
@@ -380,6 +387,7 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         }
     };
     blend_known(&mut psi, &phi0, &weights);
+    remove_islands(&mut psi, &unknown);
     redistance_full(&mut psi)?;
     lap("fill", &mut timings);
     let patch = extract_surface(&psi, &ExtractOptions::default())?;
