@@ -131,7 +131,10 @@ fn view_is_perpendicular_to_the_tube_from_the_side_of_d() {
         (v.view + outward).norm()
     );
     assert!(v.view.dot(&axis).abs() < 1e-9, "{v:?}");
-    assert!((v.view + outward).norm() < 1e-9, "{v:?} vs {outward}");
+    // The axis point comes from the triangles' normal lines, which pass the axis at a sixth of
+    // an edge (the triangles' centroids are off their quads' middles); the box cuts the rings
+    // unevenly here, so that no longer cancels exactly (measured 4.5e-5).
+    assert!((v.view + outward).norm() < 1e-3, "{v:?} vs {outward}");
 }
 
 #[test]
@@ -316,23 +319,42 @@ fn bad_path_or_size_fails_and_leaves_no_file() {
 }
 
 #[test]
-fn tube_phantom_picture_for_a_person() {
-    let phantom = make_phantom(PhantomKind::Tube, &PhantomOptions::default()).unwrap();
-    let path = figure_dir().join("tube_phantom.png");
-    render_repair(
-        &phantom.damaged,
-        &phantom.truth,
-        &phantom.regions,
-        &path,
-        &RepairPictureOptions::default(),
-    )
-    .unwrap();
-    let image = decode(&path);
-    let [_, rrect] = panel_layout(&RepairPictureOptions::default());
-    let red = panel_pixels(&image, rrect)
-        .iter()
-        .filter(|p| is_red(p.2))
-        .count();
-    assert!(red > 10_000, "red pixels {red}");
-    println!("{}: {}", phantom.description, path.display());
+fn phantom_pictures_for_a_person() {
+    // Each phantom's truth stands in for the repaired vessel.
+    for kind in [
+        PhantomKind::Tube,
+        PhantomKind::Curved,
+        PhantomKind::Bifurcation,
+        PhantomKind::Stenosis,
+    ] {
+        let phantom = make_phantom(kind, &PhantomOptions::default()).unwrap();
+        let opts = RepairPictureOptions::default();
+        let path = figure_dir().join(format!("{}_phantom.png", kind.as_str()));
+        render_repair(
+            &phantom.damaged,
+            &phantom.truth,
+            &phantom.regions,
+            &path,
+            &opts,
+        )
+        .unwrap();
+        let image = decode(&path);
+        let [lrect, rrect] = panel_layout(&opts);
+        let count = |rect, f: &dyn Fn([u8; 3]) -> bool| {
+            panel_pixels(&image, rect).iter().filter(|p| f(p.2)).count()
+        };
+        let red = count(rrect, &is_red);
+        let grey = count(lrect, &is_grey);
+        assert!(
+            red > 5_000 && grey > 5_000,
+            "{kind:?}: red {red}, grey {grey}"
+        );
+        let v = repair_view(&phantom.truth, &phantom.regions);
+        println!(
+            "{}: red {red} px, grey {grey} px, view {:.3?}, {}",
+            phantom.description,
+            v.view.as_slice(),
+            path.display()
+        );
+    }
 }

@@ -12,11 +12,13 @@
 //!   area-weighted normal tensor Σ A n nᵀ of the repaired mesh's triangles in the box: its
 //!   eigenvector of smallest eigenvalue is the vessel's axis (a tube's normals are all
 //!   perpendicular to it; for a sheet it is some direction in the sheet), shown to the right.
-//!   The camera looks along the dominant normal of the triangles in D (the eigenvector of
-//!   largest eigenvalue of their tensor; a sign-free mean, so the mesh's orientation does not
-//!   matter) made orthogonal to the axis, or along the box's dominant normal when D holds no
-//!   triangle; from the side where D's centroid is nearer than the box's, so a wall defect is
-//!   seen from outside.
+//!   The camera looks from the balls' centre towards the axis, perpendicular to it: the axis
+//!   point is where the triangles' normal lines meet (least squares, area-weighted; a tube's
+//!   all cross its axis), so a wall defect with its ball centred on the wall is seen face on
+//!   from outside. All of this is sign-free in the normals: the mesh's orientation does not
+//!   matter. When the balls' centre lies on the axis (or there is no ball) the camera looks
+//!   along the dominant normal of the triangles in D (of those in the box when D holds none),
+//!   made orthogonal to the axis, from the side where D's centroid is nearer.
 //! - Drawing: a z-buffered scan conversion with 2×2 supersampling, two-sided Lambert shading
 //!   plus ambient (as [`super::render`]), but with one colour per triangle: grey surfaces, the
 //!   repaired mesh's triangles in D (a corner in some ball) red, the input's tinted light red,
@@ -148,14 +150,50 @@ fn context_box(after: &TriMesh, balls: &[Ball]) -> (Point3<f64>, Point3<f64>) {
     used_bounds(after).unwrap_or((Point3::from([-1.0; 3]), Point3::from([1.0; 3])))
 }
 
-/// Area-weighted normal tensor Σ A n nᵀ (n the unit normal, A the area) and area-weighted
-/// centroid of the faces of `mesh` that `keep` selects; `None` when they have no area.
-fn normal_tensor(
-    mesh: &TriMesh,
-    mut keep: impl FnMut(&[Point3<f64>; 3]) -> bool,
-) -> Option<(Matrix3<f64>, Point3<f64>)> {
+/// Area-weighted moments of a set of triangles (n the unit normal, A the area, c the
+/// centroid of a triangle, all sums divided by Σ A).
+#[derive(Clone, Copy, Debug)]
+struct Patch {
+    /// Normal tensor Σ A n nᵀ / Σ A.
+    tensor: Matrix3<f64>,
+    /// Area centroid Σ A c / Σ A.
+    centroid: Point3<f64>,
+    /// Σ A (I − n nᵀ) c / Σ A, the right-hand side of the least-squares meeting point of the
+    /// normal lines.
+    lines: Vector3<f64>,
+}
+
+impl Patch {
+    /// The point nearest (least squares, area-weighted) to all the triangles' normal lines:
+    /// on the axis of a tube (its normal lines all cross the axis), at the centroid's position
+    /// along the axis. It solves M x = Σ A (I − n nᵀ) c / Σ A with M = I − tensor in M's
+    /// eigenbasis; along eigenvectors whose eigenvalue is below [`LINES_DETERMINE`] (a sheet's
+    /// normal, which its parallel normal lines leave undetermined) x keeps the centroid's
+    /// coordinate.
+    fn axis_point(&self) -> Option<Point3<f64>> {
+        let eig = SymmetricEigen::new(Matrix3::identity() - self.tensor);
+        let residual = self.lines - (Matrix3::identity() - self.tensor) * self.centroid.coords;
+        let mut x = self.centroid.coords;
+        for k in 0..3 {
+            let mu = eig.eigenvalues[k];
+            if mu > LINES_DETERMINE {
+                let e = eig.eigenvectors.column(k);
+                x += e * (e.dot(&residual) / mu);
+            }
+        }
+        x.iter().all(|c| c.is_finite()).then_some(Point3::from(x))
+    }
+}
+
+/// Eigenvalue of I − Σ A n nᵀ / Σ A below which the normal lines are taken to leave a direction
+/// undetermined (a tube's cross-section plane has ½, its axis 1, a sheet's normal 0).
+const LINES_DETERMINE: f64 = 0.1;
+
+/// The moments of the faces of `mesh` that `keep` selects; `None` when they have no area.
+fn patch(mesh: &TriMesh, mut keep: impl FnMut(&[Point3<f64>; 3]) -> bool) -> Option<Patch> {
     let n = mesh.vertices.len();
-    let (mut tensor, mut centroid, mut total) = (Matrix3::zeros(), Vector3::zeros(), 0.0);
+    let (mut tensor, mut centroid, mut lines, mut total) =
+        (Matrix3::zeros(), Vector3::zeros(), Vector3::zeros(), 0.0);
     for f in &mesh.faces {
         if !f.iter().all(|&i| (i as usize) < n) {
             continue;
@@ -171,11 +209,18 @@ fn normal_tensor(
             continue;
         }
         let unit = cross / (2.0 * area);
-        tensor += unit * unit.transpose() * area;
-        centroid += (a.coords + b.coords + c.coords) * (area / 3.0);
+        let nn = unit * unit.transpose();
+        let mid = (a.coords + b.coords + c.coords) / 3.0;
+        tensor += nn * area;
+        centroid += mid * area;
+        lines += (Matrix3::identity() - nn) * mid * area;
         total += area;
     }
-    (total > 0.0).then(|| (tensor / total, Point3::from(centroid / total)))
+    (total > 0.0).then(|| Patch {
+        tensor: tensor / total,
+        centroid: Point3::from(centroid / total),
+        lines: lines / total,
+    })
 }
 
 /// Eigenvectors of a symmetric 3×3 matrix, ordered by increasing eigenvalue.
@@ -203,31 +248,46 @@ pub fn repair_view(after: &TriMesh, balls: &[Ball]) -> RepairView {
         right: Vector3::new(1.0, 0.0, 0.0),
     };
     let boxed = view;
-    let Some((box_tensor, box_centroid)) = normal_tensor(after, |[a, b, c]| {
+    let Some(context) = patch(after, |[a, b, c]| {
         boxed.contains(&Point3::from((a.coords + b.coords + c.coords) / 3.0))
     }) else {
         return view;
     };
-    let Some([axis, _, box_normal]) = sorted_eigenvectors(box_tensor) else {
+    let Some([axis, _, box_normal]) = sorted_eigenvectors(context.tensor) else {
         return view;
     };
     let balls: Vec<&Ball> = balls.iter().filter(|b| usable(b)).collect();
-    let d_part = normal_tensor(after, |corners| {
-        corners.iter().any(|p| balls.iter().any(|b| b.contains(p)))
+    let across = |v: Vector3<f64>| v - axis * axis.dot(&v);
+    // From the vessel's axis towards the balls' centre: the side D is on.
+    let size = (max - min).norm();
+    let from_axis = context.axis_point().and_then(|x| {
+        let centre =
+            balls.iter().map(|b| b.center.coords).sum::<Vector3<f64>>() / balls.len().max(1) as f64;
+        (!balls.is_empty())
+            .then(|| across(centre - x.coords))
+            .and_then(|v| v.try_normalize(1e-6 * size))
     });
-    // The direction D faces, made orthogonal to the axis; the box's dominant normal otherwise.
-    let facing = d_part
-        .and_then(|(t, _)| sorted_eigenvectors(t))
-        .and_then(|[_, _, m]| (m - axis * axis.dot(&m)).try_normalize(1e-6))
-        .unwrap_or(box_normal);
-    // Look from D's side: D's centroid nearer the viewer than the box's.
-    let towards = d_part.map_or(0.0, |(_, c)| facing.dot(&(c - box_centroid)));
-    let d = if towards > 0.0 {
-        -facing
-    } else if towards < 0.0 {
-        facing
-    } else {
-        with_largest_component_negative(facing)
+    let d = match from_axis {
+        Some(v) => -v,
+        None => {
+            // The balls' centre on the axis (or no ball): the dominant normal of D's triangles
+            // (of the box's without any), from the side where D's centroid is nearer.
+            let d_part = patch(after, |corners| {
+                corners.iter().any(|p| balls.iter().any(|b| b.contains(p)))
+            });
+            let facing = d_part
+                .and_then(|p| sorted_eigenvectors(p.tensor))
+                .and_then(|[_, _, m]| across(m).try_normalize(1e-6))
+                .unwrap_or(box_normal);
+            let towards = d_part.map_or(0.0, |p| facing.dot(&(p.centroid - context.centroid)));
+            if towards > 0.0 {
+                -facing
+            } else if towards < 0.0 {
+                facing
+            } else {
+                with_largest_component_negative(facing)
+            }
+        }
     };
     let right = (axis - d * d.dot(&axis))
         .try_normalize(1e-9)
