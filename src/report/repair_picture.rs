@@ -9,11 +9,13 @@
 //!   orthographic and fitted to what is drawn (both meshes and the balls' discs), one scale for
 //!   both panels.
 //! - View direction ([`repair_view`]): perpendicular to the vessel, D face on. From the
-//!   area-weighted normal tensor Σ A n nᵀ of the repaired mesh's triangles in the box: its
+//!   normal tensor Σ w A n nᵀ of the repaired mesh's triangles in the box, weighted by area A
+//!   and by nearness to D, w = exp(−d²/2r²) (d the distance to a ball's centre, r its radius;
+//!   the largest over the balls), so that a bend or branch away from D counts little: its
 //!   eigenvector of smallest eigenvalue is the vessel's axis (a tube's normals are all
 //!   perpendicular to it; for a sheet it is some direction in the sheet), shown to the right.
 //!   The camera looks from the balls' centre towards the axis, perpendicular to it: the axis
-//!   point is where the triangles' normal lines meet (least squares, area-weighted; a tube's
+//!   point is where the triangles' normal lines meet (least squares, same weights; a tube's
 //!   all cross its axis), so a wall defect with its ball centred on the wall is seen face on
 //!   from outside. All of this is sign-free in the normals: the mesh's orientation does not
 //!   matter. When the balls' centre lies on the axis (or there is no ball) the camera looks
@@ -164,7 +166,7 @@ struct Patch {
 }
 
 impl Patch {
-    /// The point nearest (least squares, area-weighted) to all the triangles' normal lines:
+    /// The point nearest (least squares, weighted) to all the triangles' normal lines:
     /// on the axis of a tube (its normal lines all cross the axis), at the centroid's position
     /// along the axis. It solves M x = Σ A (I − n nᵀ) c / Σ A with M = I − tensor in M's
     /// eigenbasis; along eigenvectors whose eigenvalue is below [`LINES_DETERMINE`] (a sheet's
@@ -189,8 +191,9 @@ impl Patch {
 /// undetermined (a tube's cross-section plane has ½, its axis 1, a sheet's normal 0).
 const LINES_DETERMINE: f64 = 0.1;
 
-/// The moments of the faces of `mesh` that `keep` selects; `None` when they have no area.
-fn patch(mesh: &TriMesh, mut keep: impl FnMut(&[Point3<f64>; 3]) -> bool) -> Option<Patch> {
+/// The moments of the faces of `mesh`, each area weighted also by `weight` of its corners
+/// (0 leaves the face out); `None` when the weights leave no area.
+fn patch(mesh: &TriMesh, mut weight: impl FnMut(&[Point3<f64>; 3]) -> f64) -> Option<Patch> {
     let n = mesh.vertices.len();
     let (mut tensor, mut centroid, mut lines, mut total) =
         (Matrix3::zeros(), Vector3::zeros(), Vector3::zeros(), 0.0);
@@ -199,16 +202,21 @@ fn patch(mesh: &TriMesh, mut keep: impl FnMut(&[Point3<f64>; 3]) -> bool) -> Opt
             continue;
         }
         let corners = f.map(|i| mesh.vertices[i as usize]);
-        if !corners.iter().all(|p| p.iter().all(|c| c.is_finite())) || !keep(&corners) {
+        if !corners.iter().all(|p| p.iter().all(|c| c.is_finite())) {
+            continue;
+        }
+        let w = weight(&corners);
+        if !(w > 0.0 && w.is_finite()) {
             continue;
         }
         let [a, b, c] = corners;
         let cross = (b - a).cross(&(c - a));
-        let area = 0.5 * cross.norm();
-        if !(area > 0.0 && area.is_finite()) {
+        let raw = 0.5 * cross.norm();
+        if !(raw > 0.0 && raw.is_finite()) {
             continue;
         }
-        let unit = cross / (2.0 * area);
+        let unit = cross / (2.0 * raw);
+        let area = raw * w;
         let nn = unit * unit.transpose();
         let mid = (a.coords + b.coords + c.coords) / 3.0;
         tensor += nn * area;
@@ -235,8 +243,8 @@ fn sorted_eigenvectors(m: Matrix3<f64>) -> Option<[Vector3<f64>; 3]> {
 }
 
 /// The camera of the repair picture of `after` with regions `balls` (see the module docs): the
-/// context box, and the view from the normals of `after`'s triangles in the box (the vessel's
-/// axis) and in D (the direction D faces). With no surface in the box it looks along −y with z
+/// context box, and the view from the normals of `after`'s triangles in the box, weighted by
+/// nearness to D (the vessel's axis and the point on it facing D). With no surface in the box it looks along −y with z
 /// up.
 pub fn repair_view(after: &TriMesh, balls: &[Ball]) -> RepairView {
     let (min, max) = context_box(after, balls);
@@ -248,15 +256,29 @@ pub fn repair_view(after: &TriMesh, balls: &[Ball]) -> RepairView {
         right: Vector3::new(1.0, 0.0, 0.0),
     };
     let boxed = view;
+    let balls: Vec<&Ball> = balls.iter().filter(|b| usable(b)).collect();
+    // The box's triangles, weighted by nearness to D: exp(−d²/2r²) with d the distance to the
+    // centre of a ball of radius r > 0 (the largest over the balls).
+    let near = |p: &Point3<f64>| {
+        let weights = balls
+            .iter()
+            .filter(|b| b.radius > 0.0)
+            .map(|b| (-(p - b.center).norm_squared() / (2.0 * b.radius * b.radius)).exp());
+        weights.fold(None, |m: Option<f64>, w| Some(m.map_or(w, |m| m.max(w))))
+    };
     let Some(context) = patch(after, |[a, b, c]| {
-        boxed.contains(&Point3::from((a.coords + b.coords + c.coords) / 3.0))
+        let mid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+        if boxed.contains(&mid) {
+            near(&mid).unwrap_or(1.0)
+        } else {
+            0.0
+        }
     }) else {
         return view;
     };
     let Some([axis, _, box_normal]) = sorted_eigenvectors(context.tensor) else {
         return view;
     };
-    let balls: Vec<&Ball> = balls.iter().filter(|b| usable(b)).collect();
     let across = |v: Vector3<f64>| v - axis * axis.dot(&v);
     // From the vessel's axis towards the balls' centre: the side D is on.
     let size = (max - min).norm();
@@ -273,7 +295,12 @@ pub fn repair_view(after: &TriMesh, balls: &[Ball]) -> RepairView {
             // The balls' centre on the axis (or no ball): the dominant normal of D's triangles
             // (of the box's without any), from the side where D's centroid is nearer.
             let d_part = patch(after, |corners| {
-                corners.iter().any(|p| balls.iter().any(|b| b.contains(p)))
+                let touches = corners.iter().any(|p| balls.iter().any(|b| b.contains(p)));
+                if touches {
+                    1.0
+                } else {
+                    0.0
+                }
             });
             let facing = d_part
                 .and_then(|p| sorted_eigenvectors(p.tensor))
