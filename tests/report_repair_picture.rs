@@ -4,8 +4,10 @@
 //! written PNG decodes; both panels show grey surface; the red of the repaired panel sits where
 //! the ball projects and covers the fraction of the surface that the triangles touching D cover
 //! in projection (brute force over the faces); outside D the two panels are identical pixel for
-//! pixel (one camera); bad paths and sizes fail and leave no file. A picture of the tube
-//! phantom of src/inpaint/phantom.rs is written to target/ for a person to look at.
+//! pixel (one camera); bad paths and sizes fail and leave no file. Pictures of the phantoms of
+//! src/inpaint/phantom.rs (truth standing in for the repair) and of the real ICA aneurysm (a
+//! ball on its widest point) are written to target/tmp/report_repair_picture/ for a person to
+//! look at.
 
 mod common;
 

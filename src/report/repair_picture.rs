@@ -50,7 +50,7 @@ pub const OUTLINE_RED: [u8; 3] = [170, 10, 10];
 pub const BACKGROUND: [u8; 3] = [255, 255, 255];
 
 /// Largest accepted width or height, pixels.
-const MAX_SIDE: u32 = 16384;
+const MAX_SIDE: u32 = 4096;
 /// Smallest accepted width or height, pixels.
 const MIN_SIDE: u32 = 32;
 /// Pixels between the two panels.
@@ -65,9 +65,9 @@ const AMBIENT: f64 = 0.3;
 /// Size of the picture.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RepairPictureOptions {
-    /// Width of the whole picture (both panels), pixels, in [32, 16384].
+    /// Width of the whole picture (both panels), pixels, in [32, 4096].
     pub width: u32,
-    /// Height of the whole picture (titles and panels), pixels, in [32, 16384].
+    /// Height of the whole picture (titles and panels), pixels, in [32, 4096].
     pub height: u32,
 }
 
