@@ -8,6 +8,7 @@ use crate::inpaint::region::{parse_ball, read_regions, validate_regions, Ball};
 use crate::inpaint::repair::{repair, InpaintMethod, RepairOptions};
 use crate::io::{read_mesh, write_atomic, write_mesh, MeshFormat};
 use crate::mesh::info::mesh_info;
+use crate::report::repair_picture::{render_repair, RepairPictureOptions};
 use crate::report::repair_report::{
     region_reports, surface_measures, RegionReport, SurfaceMeasures,
 };
@@ -72,6 +73,10 @@ pub struct RepairArgs {
     /// Write the full report as JSON to this file.
     #[arg(long, value_name = "R.json")]
     pub report: Option<PathBuf>,
+    /// Render the input and the repaired vessel around D side by side as a PNG, the inpainted
+    /// region in red.
+    #[arg(long, value_name = "P.png")]
+    pub picture: Option<PathBuf>,
     /// Name of the file's length unit, used in the report (e.g. mm); coordinates are never
     /// rescaled.
     #[arg(long, value_name = "UNIT", default_value = "file units")]
@@ -258,6 +263,15 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
                 .and_then(|_| out.write_all(b"\n"))
                 .map_err(|e| crate::Error::io(path, e))
         })?;
+    }
+    if let Some(path) = &args.picture {
+        render_repair(
+            &result.closed_input,
+            &result.mesh,
+            &balls,
+            path,
+            &RepairPictureOptions::default(),
+        )?;
     }
     bar.finish_and_clear();
     if !ctx.quiet {

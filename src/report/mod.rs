@@ -8,6 +8,7 @@ pub mod colormap;
 pub mod histogram;
 pub mod image;
 pub mod render;
+pub mod repair_picture;
 pub mod repair_report;
 pub mod stenosis;
 mod text;
@@ -16,3 +17,6 @@ pub use colormap::ColorMap;
 pub use histogram::{histogram, histogram_grid, Histogram, HistogramFigure, HistogramOptions};
 pub use image::{write_png, RgbImage};
 pub use render::{render_mesh, render_strip, Camera, Panel, RenderOptions, StripOptions};
+pub use repair_picture::{
+    panel_layout, render_repair, repair_picture, repair_view, RepairPictureOptions, RepairView,
+};
