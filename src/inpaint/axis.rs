@@ -104,3 +104,66 @@ pub fn branch_crossings(mesh: &TriMesh, balls: &[Ball], reach: f64) -> Vec<Branc
         })
         .collect()
 }
+
+/// A cylinder fitted to the triangles of `mesh` outside the balls whose centroid lies within
+/// `reach` of `near`: the axis from the normal covariance (as [`estimate_axis`]), a point of the
+/// axis where the normal lines meet (least squares, pinned along the axis at `near`), and the
+/// radius as the area-weighted mean distance of the triangles from that axis. None without
+/// triangles there.
+pub fn fit_cylinder(
+    mesh: &TriMesh,
+    balls: &[Ball],
+    near: &Point3<f64>,
+    reach: f64,
+) -> Option<(Point3<f64>, Vector3<f64>, f64)> {
+    let mut picked = Vec::new();
+    let mut cov = Matrix3::zeros();
+    for f in 0..mesh.num_faces() {
+        let [a, b, c] = mesh.triangle(f);
+        if balls
+            .iter()
+            .any(|ball| ball.contains(&a) || ball.contains(&b) || ball.contains(&c))
+        {
+            continue;
+        }
+        let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+        if (centroid - near).norm() > reach {
+            continue;
+        }
+        let raw = mesh.face_normal_raw(f);
+        let area2 = raw.norm();
+        if area2 <= 0.0 {
+            continue;
+        }
+        let n = raw / area2;
+        cov += n * n.transpose() * area2;
+        picked.push((centroid, n, area2));
+    }
+    if picked.len() < 3 {
+        return None;
+    }
+    let eig = SymmetricEigen::new(cov);
+    let axis = eig
+        .eigenvectors
+        .column(eig.eigenvalues.imin())
+        .into_owned()
+        .try_normalize(1e-12)?;
+    let total: f64 = picked.iter().map(|p| p.2).sum();
+    let mut m = axis * axis.transpose() * total;
+    let mut rhs = axis * axis.dot(&near.coords) * total;
+    for (x, n, w) in &picked {
+        let p = Matrix3::identity() - n * n.transpose();
+        m += p * *w;
+        rhs += p * x.coords * *w;
+    }
+    let point = Point3::from(m.try_inverse()? * rhs);
+    let radius = picked
+        .iter()
+        .map(|(x, _, w)| {
+            let d = x - point;
+            (d - axis * d.dot(&axis)).norm() * w
+        })
+        .sum::<f64>()
+        / total;
+    Some((point, axis, radius))
+}

@@ -6,6 +6,7 @@ pub mod axial;
 pub mod axis;
 pub mod harmonic;
 pub mod holes;
+pub mod junction;
 pub mod mask;
 pub mod msr_fill;
 pub mod phantom;

@@ -14,7 +14,8 @@
 //!    vessel with the filled sub-box. Check that the output is closed where the input was.
 
 use super::axial::fill_axial;
-use super::axis::{branch_crossings, estimate_axis};
+use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
+use super::junction::{fill_junction, Branch};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{coarse_level, fill_msr, MsrFillOptions};
 use super::region::Ball;
@@ -163,6 +164,8 @@ pub struct Repair {
     pub epsilon: f64,
     /// The vessel axis used for each region (`axial`).
     pub axes: Vec<[f64; 3]>,
+    /// Regions filled as junctions (`axial`: three or more branches cross the ball).
+    pub junctions: usize,
     /// Iterations of the fill (1 for `axial` and `msr`).
     pub iterations: usize,
     /// Whether the fill converged (always for the one-shot fills).
@@ -308,6 +311,7 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         .map(|_| ())
     };
     let mut axes = Vec::new();
+    let mut junctions = 0;
     let mut iterations = 1;
     let mut converged = true;
     let mut psi = match opts.method {
@@ -337,6 +341,42 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
             }
             let mut g = phi0.clone();
             fill_axial(&mut g, balls, &candidates)?;
+            // A junction (three or more branches cross one ball): the capsules of the branches
+            // instead, each with the radius it has at its crossing.
+            for (k, _) in balls.iter().enumerate() {
+                let mine: Vec<_> = crossings.iter().filter(|c| c.ball == k).collect();
+                if mine.len() < 3 {
+                    continue;
+                }
+                // Each branch: a cylinder fitted to the intact wall next to its crossing.
+                let branches: Vec<Branch> = mine
+                    .iter()
+                    .map(|c| {
+                        let fit =
+                            fit_cylinder(&closed_input, balls, &c.center, 2.0 * radius_estimate);
+                        match fit {
+                            Some((center, axis, radius)) => Branch {
+                                center,
+                                axis,
+                                radius,
+                            },
+                            None => Branch {
+                                center: c.center,
+                                axis: c.axis,
+                                radius: radius_estimate,
+                            },
+                        }
+                    })
+                    .collect();
+                let only: Vec<bool> = depth
+                    .iter()
+                    .zip(&g.data().to_vec())
+                    .enumerate()
+                    .map(|(n, (&d, _))| d > 0.0 && nearest_ball(&phi0, balls, n) == k)
+                    .collect();
+                fill_junction(&mut g, &only, &branches)?;
+                junctions += 1;
+            }
             g
         }
         InpaintMethod::Msr => fill_msr(&phi0, &unknown, &fill_opts)?.0,
@@ -427,12 +467,30 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         time,
         epsilon,
         axes,
+        junctions,
         iterations,
         converged,
         stitched,
         fallback,
         timings,
     })
+}
+
+/// The ball in which node `n` of `grid` lies deepest.
+fn nearest_ball(grid: &Grid3, balls: &[Ball], n: usize) -> usize {
+    let [nx, ny, _] = grid.dims();
+    let p = grid.transform().index_to_world(Vector3::new(
+        (n % nx) as f64,
+        ((n / nx) % ny) as f64,
+        (n / (nx * ny)) as f64,
+    ));
+    (0..balls.len())
+        .max_by(|&a, &b| {
+            let da = balls[a].radius - (p - balls[a].center).norm();
+            let db = balls[b].radius - (p - balls[b].center).norm();
+            da.total_cmp(&db)
+        })
+        .unwrap_or(0)
 }
 
 /// Largest change of φ at the nodes of D next to the zero level set of either field (world units).
