@@ -4,29 +4,33 @@
 //! `axial` loop runs against the same loop in numpy/scipy/libigl (reference/inpaint.py).
 //!
 //! a) Phantoms (`make_phantom`, all five kinds, seed 1, default options: R = 3, h = R/8): each
-//!    method of `InpaintMethod::ALL` at the phantom's voxel, close-holes and Poisson (depth 8) on
-//!    the damaged STL. Per output: the symmetric Hausdorff distance to the truth restricted to D
+//!    method of `InpaintMethod::ALL` at the phantom's voxel, close-holes (any hole size: the
+//!    phantoms are closed, so it returns the damaged mesh, the honest baseline figure) and
+//!    Poisson (depth 7) on the damaged STL. Per output: the symmetric Hausdorff distance to the truth restricted to D
 //!    (dense barycentric samples of each surface inside D, distance to the other whole surface by
 //!    BVH closest point; in units of h), the volume error in D
 //!    (Σ_balls volume_in_ball(output) − volume_in_ball(truth)) / volume_in_ball(truth) in %,
 //!    the number of components, and seconds (ours: the whole `repair`; baselines: the pymeshlab
 //!    filter). The winner per phantom is the smallest Hausdorff (ties: the volume error).
 //! b) Real meshes with synthetic damage (../shared/data/real, not the cortex; skipped with a
-//!    notice when absent): the mesh (capped with `cap_holes` when open, made outward) is
-//!    voxelized on its default grid; 3 wall points are drawn (splitmix64 on the seed, area-weighted
-//!    face and barycentric point; kept > 3 local radii from the open ends' vertices and from both
-//!    ends of the longest bounding-box extent, where capped ends lie); R =
-//!    `local_vessel_radius` there; damaged = marching cubes of max(φ_mesh, −φ_ball) with the ball
+//!    notice when absent): the mesh is capped with `cap_holes` when open and made outward; 3
+//!    wall points are drawn (splitmix64 on the seed, area-weighted face and barycentric point;
+//!    kept > 3 local radii from the open ends' vertices and from both ends of the longest
+//!    bounding-box extent, where capped ends lie, and apart from each other); R =
+//!    `local_vessel_radius` there; the mesh is voxelized on its grid with voxel h = max(default
+//!    voxel, smallest R / 8) (the default alone made `msr` take 70 s a case on the aorta); damaged = marching cubes of max(φ_mesh, −φ_ball) with the ball
 //!    of radius 1.5R on the point, truth = marching cubes of φ_mesh on the same grid; D = the ball
 //!    of radius 1.5R·1.3 on the point. Repaired at the grid's voxel by each method and the
-//!    baselines (Poisson on the first point of each mesh only: it costs 5–20 s a run); per case
-//!    and the median per method.
+//!    close-holes baseline; per case and the median per method. `flow` and `paper` (20 and up
+//!    to 12 level-set motions on a sub-box of about 10⁶ nodes: a minute or more a case)
+//!    run only when $VESSELMSR_BENCH_FULL is set, to keep the bench within minutes.
 //! c) Speed: one region of (b) on the capped aorta at the default voxel: our `repair` (axial)
 //!    against reference/inpaint.py (φ_0 by libigl signed distance, axis, vectorised axial fill,
 //!    blend; it stops at the filled φ), one run each; the ratio compares like with like: the
 //!    reference's seconds against our "voxelize" + "fill" phases (which also redistance).
 //!
-//! Run: `cargo bench --bench inpaint` (the baselines and the reference need reference/.venv,
+//! Run: `cargo bench --bench inpaint` (`-- phantoms` for (a) only, `-- real` for (b) and (c);
+//! $VESSELMSR_BENCH_FULL=1 adds `flow` and `paper` to (b)) (the baselines and the reference need reference/.venv,
 //! which `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON; without it only our methods run).
 
 mod common;
@@ -57,6 +61,10 @@ const REAL: [&str; 5] = [
     "ica_aneurysm_c0015.stl",
     "coronary_stenosis_xray.stl",
 ];
+/// Coarsest voxel of (b), as a fraction of the smallest local radius: the default voxel or
+/// R/8 (the phantoms' resolution), whichever is larger (at the default voxel alone the aorta's
+/// `msr` took 70 s a case).
+const VOXELS_PER_RADIUS: f64 = 8.0;
 /// Damaged wall points per real mesh.
 const POINTS: usize = 3;
 /// Octree depth of the Poisson baseline (7: cells of 0.3–0.6 h on the phantoms; depth 8 took
@@ -255,7 +263,7 @@ fn winner(scores: &[Option<Score>]) -> Option<usize> {
 
 fn print_header(first: &str) {
     println!(
-        "{first:<22} | {}",
+        "{first:<30} | {}",
         labels()
             .iter()
             .map(|l| format!("{l:>25}"))
@@ -268,9 +276,19 @@ fn print_row(case: &str, scores: &[Option<Score>]) {
     let names = labels();
     let w = winner(scores).map_or("–".to_string(), |i| names[i].clone());
     println!(
-        "{case:<22} | {} | best: {w}",
+        "{case:<30} | {} | best: {w}",
         scores.iter().map(cell).collect::<Vec<_>>().join(" | ")
     );
+}
+
+/// `x` with 4 significant digits (the meshes' units range from metres to millimetres).
+fn sig(x: f64) -> String {
+    let digits = if x == 0.0 || !x.is_finite() {
+        0
+    } else {
+        (3 - x.abs().log10().floor() as i64).max(0) as usize
+    };
+    format!("{x:.digits$}")
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -422,7 +440,23 @@ fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
             println!("  skipping {name}: could not cap");
             continue;
         };
-        let spec = match grid_for_mesh(&closed, &GridOptions::default()) {
+        let points = wall_points(&closed, &ends, 1);
+        let Some(r_min) = points.iter().map(|&(_, r)| r).reduce(f64::min) else {
+            println!("  skipping {name}: no wall point away from the ends");
+            continue;
+        };
+        let default_h = match grid_for_mesh(&closed, &GridOptions::default()) {
+            Ok(s) => s.voxel(),
+            Err(e) => {
+                println!("  skipping {name}: {e}");
+                continue;
+            }
+        };
+        let grid_opts = GridOptions {
+            voxel: Some(default_h.max(r_min / VOXELS_PER_RADIUS)),
+            ..GridOptions::default()
+        };
+        let spec = match grid_for_mesh(&closed, &grid_opts) {
             Ok(s) => s,
             Err(e) => {
                 println!("  skipping {name}: {e}");
@@ -446,15 +480,13 @@ fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
             println!("  skipping {name}: no truth surface");
             continue;
         };
-        let points = wall_points(&closed, &ends, 1);
         println!(
-            "  {name}: grid {:?}, h = {h:.4}, {} wall points, local radii {:?}",
+            "  {name}: grid {:?}, h = {} (default {}), {} wall points, local radii {:?}",
             spec.dims,
+            sig(h),
+            sig(default_h),
             points.len(),
-            points
-                .iter()
-                .map(|(_, r)| format!("{r:.3}"))
-                .collect::<Vec<_>>()
+            points.iter().map(|&(_, r)| sig(r)).collect::<Vec<_>>()
         );
         for (n, (p, r)) in points.iter().enumerate() {
             let chop = Ball {
@@ -471,7 +503,7 @@ fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
             };
             let case = format!("{}#{}", name.trim_end_matches(".stl"), n + 1);
             let balls = [region];
-            let slow = n == 0 || full;
+            let slow = full;
             let scores = run_all(&case, &damaged, &truth, &balls, h, reference, slow, false);
             print_row(&case, &scores);
             for (i, s) in scores.iter().enumerate() {
@@ -586,9 +618,18 @@ fn main() {
     );
     println!("reproduce: cargo bench --bench inpaint");
     let reference = Reference::find_or_notice("baselines and reference loop");
-    phantoms(reference.as_ref());
+    // `cargo bench --bench inpaint -- real` runs (b) and (c) only, `-- phantoms` (a) only.
+    let only: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let wants = |part: &str| only.is_empty() || only.iter().any(|a| a == part);
+    if wants("phantoms") {
+        phantoms(reference.as_ref());
+    }
     let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"));
-    if !dir.is_dir() {
+    if !wants("real") {
+    } else if !dir.is_dir() {
         println!("skipping (b) and (c): ../shared/data/real not found");
     } else if let Some(case) = real(dir, reference.as_ref()) {
         speed(&case, reference.as_ref());
