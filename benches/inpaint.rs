@@ -166,6 +166,15 @@ fn labels() -> Vec<String> {
     l
 }
 
+/// Which of the costly runs to do.
+#[derive(Clone, Copy)]
+struct Which {
+    /// `flow` and `paper`.
+    slow: bool,
+    /// The Poisson baseline.
+    poisson: bool,
+}
+
 /// Runs every method of ours and the baselines on `damaged`; one entry per label (None: failed
 /// or skipped, with the reason printed).
 fn run_all(
@@ -175,9 +184,12 @@ fn run_all(
     balls: &[Ball],
     h: f64,
     reference: Option<&Reference>,
-    with_slow: bool,
-    with_poisson: bool,
+    which: Which,
 ) -> Vec<Option<Score>> {
+    let Which {
+        slow: with_slow,
+        poisson: with_poisson,
+    } = which;
     let mut scores = Vec::new();
     for method in InpaintMethod::ALL {
         if !with_slow && matches!(method, InpaintMethod::Flow | InpaintMethod::Paper) {
@@ -324,8 +336,10 @@ fn phantoms(reference: Option<&Reference>) {
             &p.regions,
             p.voxel,
             reference,
-            true,
-            true,
+            Which {
+                slow: true,
+                poisson: true,
+            },
         );
         let input = score(&p.damaged, &p.truth, &p.regions, p.voxel, 0.0);
         println!(
@@ -504,7 +518,18 @@ fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
             let case = format!("{}#{}", name.trim_end_matches(".stl"), n + 1);
             let balls = [region];
             let slow = full;
-            let scores = run_all(&case, &damaged, &truth, &balls, h, reference, slow, false);
+            let scores = run_all(
+                &case,
+                &damaged,
+                &truth,
+                &balls,
+                h,
+                reference,
+                Which {
+                    slow,
+                    poisson: false,
+                },
+            );
             print_row(&case, &scores);
             for (i, s) in scores.iter().enumerate() {
                 if let Some(s) = s {
