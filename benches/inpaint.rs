@@ -29,6 +29,21 @@
 //!    blend; it stops at the filled φ), one run each; the ratio compares like with like: the
 //!    reference's seconds against our "voxelize" + "fill" phases (which also redistance).
 //!
+//! Measured 2026-12-02 (2 cores shared, load 3.8–5.9; 478 s in all):
+//! (a) Hausdorff in D (h) / volume error in D, axial | flow | msr | paper | close-holes | Poisson:
+//! tube 0.34/−0.4% | 1.09/+15.5% | 3.47/−16.3% | 5.18/−27.3% | 9.43/−24.8% | 9.38/−24.7%;
+//! curved 4.73/−5.8% | 7.89/−25.0% | 4.19/−23.6% | 7.13/−37.5% | 7.95/−34.0% | 7.94/−33.8%;
+//! bifurcation 3.69/−28.8% | 8.90/+48.7% | 5.79/+17.7% | 4.45/−0.4% | 6.31/−12.3% | 6.30/−12.2%;
+//! stenosis 0.07/−1.6% | 2.40/+29.3% | 3.98/−36.8% | 3.97/−35.1% | 4.03/−35.0% | 4.03/−34.9%;
+//! occlusion 0.02/−0.2% | 0.89/+15.3% | 1.12/−10.7% | 2.95/−24.7% | 7.97/−24.6% | 7.97/−24.5%.
+//! Best: axial on four, msr on the curved tube (axial close behind, and 6% in volume against
+//! 24%). Ours take 1–3 s (axial), 4–8 s (msr), 7–23 s (flow, paper); Poisson 4–42 s.
+//! (b) 13 cases (the aneurysm mesh gave 1 point away from its ends): medians axial 1.95 h /
+//! 4.5% (best on 12 of 13), msr 6.26 h / 36.5%, close-holes (= the damaged input) 11.9 h / 55%.
+//! (c) sub-box 115³ at h = 0.328: ours 5.2 s in all (voxelize 4.6 s, fill 0.58 s), the
+//! reference 10.6 s (libigl signed distance 8.9 s, fill 1.7 s): 2.1×; volume in D of the
+//! filled φ 1799.4 (reference) against 1797.7 (our repaired mesh, `volume_in_ball`).
+//!
 //! Run: `cargo bench --bench inpaint` (`-- phantoms` for (a) only, `-- real` for (b) and (c);
 //! $VESSELMSR_BENCH_FULL=1 adds `flow` and `paper` to (b)) (the baselines and the reference need reference/.venv,
 //! which `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON; without it only our methods run).
@@ -546,6 +561,10 @@ fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
     }
     println!("median per method over the cases it ran: Hausdorff in D (h), |volume error| (%), seconds, cases");
     for (label, scores) in labels().iter().zip(&per_method) {
+        if scores.is_empty() {
+            println!("  {label:<12} not run");
+            continue;
+        }
         println!(
             "  {label:<12} {:>6.2} {:>7.2}% {:>7.2}s  n = {}",
             median(scores.iter().map(|s| s.hausdorff_h).collect()),
