@@ -94,6 +94,7 @@ fn phantoms_are_restored_within_the_acceptance_bounds() {
         (PhantomKind::Tube, 1.5, 0.05),
         (PhantomKind::Stenosis, 1.5, 0.05),
         (PhantomKind::Occlusion, 1.5, 0.05),
+        (PhantomKind::Bifurcation, 1.5, 0.05),
     ];
     for (kind, hd_bound, vol_bound) in cases {
         let ph = phantom(kind);
@@ -116,8 +117,12 @@ fn phantoms_are_restored_within_the_acceptance_bounds() {
         );
         assert!(mesh_info(&r.mesh).watertight);
         assert_eq!(connected_components(&r.mesh).0, 1);
-        assert!(r.stitched, "{}: {:?}", kind.as_str(), r.fallback);
-        assert_outside_kept(&ph.damaged, &r.mesh, &ph.regions);
+        // At the bifurcation the patch's cross-sections near ∂D do not pair up with the holes
+        // yet: the whole vessel is re-meshed there (reported as the fallback).
+        if kind != PhantomKind::Bifurcation {
+            assert!(r.stitched, "{}: {:?}", kind.as_str(), r.fallback);
+            assert_outside_kept(&ph.damaged, &r.mesh, &ph.regions);
+        }
     }
 }
 
@@ -139,13 +144,7 @@ fn curved_gap_is_bridged_into_one_tube() {
 }
 
 #[test]
-fn bifurcation_and_every_method_give_a_closed_outward_vessel() {
-    // Accuracy at the carina is not met yet (see the inpaint bench); closedness is.
-    let ph = phantom(PhantomKind::Bifurcation);
-    let r = repaired(&ph, InpaintMethod::Axial);
-    let info = mesh_info(&r.mesh);
-    assert!(info.watertight && info.signed_volume > 0.0);
-    assert_eq!(connected_components(&r.mesh).0, 1);
+fn every_method_gives_a_closed_outward_vessel() {
     let tube = phantom(PhantomKind::Tube);
     for method in InpaintMethod::ALL {
         let r = repaired(&tube, method);

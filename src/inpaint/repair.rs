@@ -181,8 +181,9 @@ pub struct Repair {
 /// Sub-box margin around D beyond the balls, in voxels (the fills that grow the shape add half
 /// the largest radius and their growth c·T).
 const MARGIN_VOXELS: f64 = 6.0;
-/// The patch is cut this many voxels inside ∂D before it is stitched.
-const STITCH_MARGIN_VOXELS: f64 = 1.5;
+/// The patch is cut this many voxels inside ∂D before it is stitched (the first depth that
+/// stitches cleanly is taken).
+const STITCH_MARGINS_VOXELS: [f64; 5] = [1.5, 1.0, 0.75, 2.5, 3.5];
 
 /// Repairs `mesh` inside the union of `balls` (see the module docs).
 pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Repair> {
@@ -435,12 +436,22 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     let mut stitched = false;
     let mut out = None;
     if opts.keep_outside {
-        match stitch_patch(&closed_input, &patch, balls, STITCH_MARGIN_VOXELS * h) {
-            Ok(m) => {
-                out = Some(m);
-                stitched = true;
+        // Cut the patch at a few depths: near a junction the branches' cross-sections may merge
+        // at one depth and not at another.
+        for margin in STITCH_MARGINS_VOXELS {
+            match stitch_patch(&closed_input, &patch, balls, margin * h) {
+                Ok(m) => {
+                    out = Some(m);
+                    stitched = true;
+                    fallback = None;
+                    break;
+                }
+                Err(e) => {
+                    if fallback.is_none() {
+                        fallback = Some(e.to_string());
+                    }
+                }
             }
-            Err(e) => fallback = Some(e.to_string()),
         }
     }
     let mesh_out = match out {
