@@ -7,7 +7,7 @@ The same loop as `repair`, up to the filled φ (no marching cubes: skimage is no
 
 1. voxel h: given, or the project's default rule min(mean unique edge / 2, longest extent / 256);
    the lattice of the whole mesh (origin = bbox min − pad, pad = 4h + margin + 2·r_max,
-   margin = r_max/2 + 6h) and the sub-box of its nodes around the balls with that margin, as
+   margin = 6h, the axial fill's) and the sub-box of its nodes around the balls with that margin, as
    `src/inpaint/repair.rs` builds them. The mesh is used as read (a closed input is expected;
    `repair` caps open ends first — the winding-number sign tolerates holes anyway).
 2. φ_0: libigl signed distance at the sub-box nodes (fast-winding-number sign, exact distance
@@ -15,8 +15,8 @@ The same loop as `repair`, up to the filled φ (no marching cubes: skimage is no
 3. the axis of each ball: eigenvector of the smallest eigenvalue (numpy `eigh`) of the
    area-weighted normal covariance Σ A n nᵀ of the triangles whose centroid lies 1..2 ball
    radii from the centre (`src/inpaint/axis.rs`).
-4. the axial fill: every node x inside D walks x ± s·a in steps of h/2 until it leaves D (at most
-   2·Σr + 4h); φ_0 there by trilinear interpolation (`scipy.ndimage.map_coordinates`, order 1),
+4. the axial fill: every node x inside D finds where x ± s·a leaves D (exactly: the far side of
+   each ball holding the point, repeated); φ_0 there by trilinear interpolation (`scipy.ndimage.map_coordinates`, order 1),
    ψ(x) = (t₋ φ_0(x + t₊a) + t₊ φ_0(x − t₋a)) / (t₊ + t₋); one end alone when the other leaves
    the grid, φ_0 kept when both do. Vectorised over the nodes of D.
 5. the blend ψ ← w ψ + (1 − w) φ_0 with the cubic smoothstep w of the depth over 2h inside ∂D
@@ -72,7 +72,7 @@ def sub_box(V: np.ndarray, F: np.ndarray, balls: np.ndarray, h: float):
     used = V[np.unique(F)]
     lo, hi = used.min(0), used.max(0)
     rmax = float(balls[:, 3].max())
-    margin = 0.5 * rmax + MARGIN_VOXELS * h
+    margin = MARGIN_VOXELS * h  # the axial fill's margin in repair.rs
     pad = 4.0 * h + margin + 2.0 * rmax
     origin = lo - pad
     whole = np.ceil((hi - lo + 2.0 * pad) / h).astype(int) + 1
@@ -132,22 +132,27 @@ def fill_axial(phi0, origin, h, balls, axes):
     inD = np.flatnonzero(d > 0)
     P, b = P[inD], b[inD]
     A = axes[b]
-    limit = 2.0 * balls[:, 3].sum() + 4.0 * h
     ends = []
     for sign in (1.0, -1.0):
-        t = np.full(len(P), np.nan)
-        v = np.full(len(P), np.nan)
-        todo = np.arange(len(P))
-        s = 0.0
-        while len(todo) and s <= limit:
-            s += 0.5 * h
-            Q = P[todo] + sign * s * A[todo]
-            out = depth_of(Q, balls)[0] <= 0
-            hit = todo[out]
-            t[hit] = s
-            v[hit] = sample(phi0, origin, h, Q[out])
-            todo = todo[~out]
-        ends.append((t, v))
+        D = sign * A
+        # Where the line leaves the union of balls: jump to the far side of every ball that
+        # holds the current point until none does (exact, as src/inpaint/axial.rs).
+        s = np.zeros(len(P))
+        for _ in range(len(balls) + 1):
+            Q = P + s[:, None] * D
+            far = s.copy()
+            for c in balls:
+                m = Q - c[:3]
+                cc = (m * m).sum(1) - c[3] ** 2
+                bb = (m * D).sum(1)
+                inside = cc < 0
+                far[inside] = np.maximum(far[inside], s[inside] - bb[inside] + np.sqrt(bb[inside] ** 2 - cc[inside]))
+            moved = far > s
+            if not moved.any():
+                break
+            s[moved] = far[moved] + 1e-6 * h
+        Q = P + s[:, None] * D
+        ends.append((s, sample(phi0, origin, h, Q)))
     (tp, vp), (tm, vm) = ends
     both = ~np.isnan(vp) & ~np.isnan(vm)
     value = phi0.ravel()[inD].copy()

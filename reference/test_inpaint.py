@@ -85,8 +85,8 @@ def test_sub_box_matches_repair_rule():
     V, F = capped_tube()
     h = 0.25
     origin, dims = inpaint.sub_box(V, F, D, h)
-    # The box spans the ball plus the margin r/2 + 6h on every side, on the mesh's lattice.
-    margin = 0.5 * D[0, 3] + 6 * h
+    # The box spans the ball plus the axial margin 6h on every side, on the mesh's lattice.
+    margin = 6 * h
     assert np.all(origin <= D[0, :3] - D[0, 3] - margin + 1e-9)
     assert np.all(origin + (dims - 1) * h >= D[0, :3] + D[0, 3] + margin - 1e-9)
     assert np.all(origin > D[0, :3] - D[0, 3] - margin - h - 1e-9)

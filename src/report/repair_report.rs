@@ -11,6 +11,10 @@ use crate::mesh::topology::{connected_components, EdgeMap};
 use crate::TriMesh;
 use serde::Serialize;
 
+/// The adjacent normal segment of the NASCET figure is measured this many region radii from the
+/// region's centre (just outside D, on both sides).
+pub const NASCET_OFFSET: f64 = 1.15;
+
 /// One region D of the report.
 #[derive(Debug, Clone, Serialize)]
 pub struct RegionReport {
@@ -88,7 +92,10 @@ pub fn region_reports(
                 output,
                 &win_out,
                 ball,
-                &StenosisOptions::default(),
+                &StenosisOptions {
+                    normal_offset: NASCET_OFFSET,
+                    ..StenosisOptions::default()
+                },
             );
             let (s, note) = match stenosis {
                 Ok(s) => (Some(s), None),
