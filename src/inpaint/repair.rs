@@ -429,7 +429,14 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     };
     blend_known(&mut psi, &phi0, &weights);
     remove_islands(&mut psi, &unknown);
-    redistance_full(&mut psi)?;
+    // Marching cubes needs distances near the surface only.
+    redistance(
+        &mut psi,
+        &RedistanceOptions {
+            band: Some(3.0 * h),
+            ..RedistanceOptions::default()
+        },
+    )?;
     lap("fill", &mut timings);
     let patch = extract_surface(&psi, &ExtractOptions::default())?;
     let mut fallback = None;
