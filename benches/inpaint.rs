@@ -57,7 +57,7 @@ use std::path::Path;
 use std::time::Instant;
 use vesselmsr::bvh::MeshBvh;
 use vesselmsr::grid::{grid_for_mesh, Grid3, GridOptions};
-use vesselmsr::inpaint::phantom::{make_phantom, PhantomKind, PhantomOptions};
+use vesselmsr::inpaint::phantom::{make_phantom, PhantomKind, PhantomOptions, SplitMix};
 use vesselmsr::inpaint::region::{local_vessel_radius, Ball};
 use vesselmsr::inpaint::repair::{repair, InpaintMethod, RepairOptions};
 use vesselmsr::levelset::marching_cubes::{extract_surface, ExtractOptions};
@@ -111,22 +111,6 @@ struct Score {
     volume_pct: f64,
     components: usize,
     seconds: f64,
-}
-
-/// A 64-bit splitmix stream (deterministic on every machine).
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
 }
 
 fn in_region(balls: &[Ball], p: &Point3<f64>) -> bool {
@@ -400,13 +384,13 @@ fn wall_points(mesh: &TriMesh, ends: &[Point3<f64>], seed: u64) -> Vec<(Point3<f
         if found.len() == POINTS {
             break;
         }
-        let mut t = rng.next_f64() * total;
+        let mut t = rng.uniform() * total;
         let mut f = 0;
         while f + 1 < areas.len() && t > areas[f] {
             t -= areas[f];
             f += 1;
         }
-        let (mut u, mut v) = (rng.next_f64(), rng.next_f64());
+        let (mut u, mut v) = (rng.uniform(), rng.uniform());
         if u + v > 1.0 {
             (u, v) = (1.0 - u, 1.0 - v);
         }

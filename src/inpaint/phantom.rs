@@ -616,11 +616,13 @@ fn mesh_of(
     Ok(mesh)
 }
 
-/// splitmix64 (Steele, Lea, Flood 2014): a small, fixed random stream for the damage jitter.
-struct SplitMix(u64);
+/// splitmix64 (Steele, Lea, Flood 2014): a small, fixed random stream (the same on every
+/// machine) for the damage jitter; the seed is the state.
+pub struct SplitMix(pub u64);
 
 impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -629,7 +631,7 @@ impl SplitMix {
     }
 
     /// Uniform in [0, 1).
-    fn uniform(&mut self) -> f64 {
+    pub fn uniform(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
 

@@ -7,6 +7,7 @@
 pub mod colormap;
 pub mod histogram;
 pub mod image;
+mod raster;
 pub mod render;
 pub mod repair_picture;
 pub mod repair_report;

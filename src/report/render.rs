@@ -14,6 +14,7 @@
 
 use super::colormap::ColorMap;
 use super::image::RgbImage;
+use super::raster::{vertex_normals, Lighting, ZBuffer};
 use super::text::{draw_text, format_value, text_width, HAlign};
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
@@ -454,40 +455,25 @@ fn rasterize(
             ]
         })
         .collect();
-    // Area-weighted vertex normals.
-    let mut normals = vec![Vector3::<f64>::zeros(); n];
-    for f in mesh.faces.iter().filter(|f| valid(f)) {
-        let [a, b, c] = f.map(|i| mesh.vertices[i as usize]);
-        let nf = (b - a).cross(&(c - a));
-        for &i in f {
-            normals[i as usize] += nf;
-        }
-    }
-    for v in &mut normals {
-        *v = v.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
-    }
+    let normals = vertex_normals(mesh, mesh.faces.iter().filter(|f| valid(f)));
     let light = {
         let l = opts.light;
         let l = frame.right * l.x + frame.up * l.y - frame.view * l.z;
         l.try_normalize(0.0).unwrap_or(-frame.view)
     };
-    let ambient = if opts.ambient.is_finite() {
-        opts.ambient.clamp(0.0, 1.0)
-    } else {
-        0.3
+    let lighting = Lighting {
+        view: frame.view,
+        light,
+        ambient: if opts.ambient.is_finite() {
+            opts.ambient.clamp(0.0, 1.0)
+        } else {
+            0.3
+        },
     };
     let base = opts.surface_color.map(|c| c as f32);
-    let bg = opts.background.map(|c| c as f32);
-
-    let mut color = vec![bg; w * h];
-    let mut depth = vec![f64::INFINITY; w * h];
+    let mut buffer = ZBuffer::new(w, h, opts.background);
     for f in mesh.faces.iter().filter(|f| valid(f)) {
         let [i0, i1, i2] = f.map(|i| i as usize);
-        let (p0, p1, p2) = (screen[i0], screen[i1], screen[i2]);
-        let area = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1]);
-        if !area.is_finite() || area.abs() < 1e-12 {
-            continue;
-        }
         let face_normal = {
             let [a, b, c] = f.map(|i| mesh.vertices[i as usize]);
             (b - a).cross(&(c - a)).try_normalize(0.0)
@@ -495,72 +481,19 @@ fn rasterize(
         let Some(face_normal) = face_normal else {
             continue;
         };
-        let xmin = p0[0].min(p1[0]).min(p2[0]);
-        let xmax = p0[0].max(p1[0]).max(p2[0]);
-        let ymin = p0[1].min(p1[1]).min(p2[1]);
-        let ymax = p0[1].max(p1[1]).max(p2[1]);
-        // Pixels whose centres (x + ½, y + ½) can lie in the triangle.
-        let x0 = (xmin - 0.5).ceil().max(0.0);
-        let x1 = (xmax - 0.5).floor().min(w as f64 - 1.0);
-        let y0 = (ymin - 0.5).ceil().max(0.0);
-        let y1 = (ymax - 0.5).floor().min(h as f64 - 1.0);
-        if x0 > x1 || y0 > y1 {
-            continue;
-        }
-        let edge = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| {
-            (b[0] - a[0]) * (y - a[1]) - (x - a[0]) * (b[1] - a[1])
-        };
-        for py in y0 as usize..=y1 as usize {
-            let y = py as f64 + 0.5;
-            for px in x0 as usize..=x1 as usize {
-                let x = px as f64 + 0.5;
-                let b0 = edge(p1, p2, x, y) / area;
-                let b1 = edge(p2, p0, x, y) / area;
-                let b2 = edge(p0, p1, x, y) / area;
-                if b0 < 0.0 || b1 < 0.0 || b2 < 0.0 {
-                    continue;
-                }
-                let d = b0 * p0[2] + b1 * p1[2] + b2 * p2[2];
-                let k = py * w + px;
-                if d >= depth[k] {
-                    continue;
-                }
-                depth[k] = d;
-                let mut nrm = (normals[i0] * b0 + normals[i1] * b1 + normals[i2] * b2)
-                    .try_normalize(1e-6)
-                    .unwrap_or(face_normal);
-                if nrm.dot(&frame.view) > 0.0 {
-                    nrm = -nrm;
-                }
-                let shade = (ambient + (1.0 - ambient) * nrm.dot(&light).max(0.0)) as f32;
-                let c = match (scalars, range) {
-                    (Some(s), Some(range)) => opts
-                        .colormap
-                        .color(b0 * s[i0] + b1 * s[i1] + b2 * s[i2], range)
-                        .map(|c| c as f32),
-                    _ => base,
-                };
-                color[k] = c.map(|c| c * shade);
-            }
-        }
+        buffer.triangle(
+            [screen[i0], screen[i1], screen[i2]],
+            [normals[i0], normals[i1], normals[i2]],
+            face_normal,
+            &lighting,
+            |b0, b1, b2| match (scalars, range) {
+                (Some(s), Some(range)) => opts
+                    .colormap
+                    .color(b0 * s[i0] + b1 * s[i1] + b2 * s[i2], range)
+                    .map(|c| c as f32),
+                _ => base,
+            },
+        );
     }
-
-    let mut image = RgbImage::new(opts.width, opts.height, opts.background);
-    let norm = 1.0 / (ss * ss) as f32;
-    for y in 0..opts.height as usize {
-        for x in 0..opts.width as usize {
-            let mut sum = [0f32; 3];
-            for dy in 0..ss {
-                for dx in 0..ss {
-                    let c = color[(y * ss + dy) * w + x * ss + dx];
-                    for k in 0..3 {
-                        sum[k] += c[k];
-                    }
-                }
-            }
-            image.pixels[y * opts.width as usize + x] =
-                sum.map(|s| (s * norm).round().clamp(0.0, 255.0) as u8);
-        }
-    }
-    image
+    buffer.downsample(ss, opts.background)
 }

@@ -29,6 +29,7 @@
 //! Sizes are in pixels; world units are those of the meshes (never assumed to be mm).
 
 use super::image::{write_png, RgbImage};
+use super::raster::{vertex_normals, Lighting, ZBuffer};
 use super::text::{draw_text, HAlign};
 use crate::inpaint::region::Ball;
 use crate::{Error, Result, TriMesh};
@@ -464,94 +465,31 @@ fn fit(view: &RepairView, scenes: &[&Scene], balls: &[Ball], w: u32, h: u32) -> 
 /// with interpolated area-weighted vertex normals, one base colour per triangle.
 fn draw_scene(scene: &Scene, proj: &Projection, w: u32, h: u32) -> RgbImage {
     const SS: usize = 2;
-    let (sw, sh) = (w as usize * SS, h as usize * SS);
     let mesh = scene.mesh;
-    let mut normals = vec![Vector3::<f64>::zeros(); mesh.vertices.len()];
-    for (f, _) in &scene.faces {
-        let [a, b, c] = f.map(|i| mesh.vertices[i as usize]);
-        let nf = (b - a).cross(&(c - a));
-        for &i in f {
-            normals[i as usize] += nf;
-        }
-    }
-    for v in &mut normals {
-        *v = v.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
-    }
-    let light = (proj.right * LIGHT[0] + proj.up * LIGHT[1] - proj.view * LIGHT[2]).normalize();
-    let bg = BACKGROUND.map(|c| c as f32);
-    let mut color = vec![bg; sw * sh];
-    let mut depth = vec![f64::INFINITY; sw * sh];
-    let edge = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| {
-        (b[0] - a[0]) * (y - a[1]) - (x - a[0]) * (b[1] - a[1])
+    let normals = vertex_normals(mesh, scene.faces.iter().map(|(f, _)| f));
+    let lighting = Lighting {
+        view: proj.view,
+        light: (proj.right * LIGHT[0] + proj.up * LIGHT[1] - proj.view * LIGHT[2]).normalize(),
+        ambient: AMBIENT,
     };
+    let mut buffer = ZBuffer::new(w as usize * SS, h as usize * SS, BACKGROUND);
     for (f, base) in &scene.faces {
         let [i0, i1, i2] = f.map(|i| i as usize);
-        let [p0, p1, p2] =
+        let p =
             [i0, i1, i2].map(|i| proj.project(&mesh.vertices[i], w as f64, h as f64, SS as f64));
-        let area = edge(p0, p1, p2[0], p2[1]);
-        if !area.is_finite() || area.abs() < 1e-12 {
-            continue;
-        }
         let Some(face_normal) = unit_normal(mesh, f) else {
             continue;
         };
-        let x0 = (p0[0].min(p1[0]).min(p2[0]) - 0.5).ceil().max(0.0);
-        let x1 = (p0[0].max(p1[0]).max(p2[0]) - 0.5)
-            .floor()
-            .min(sw as f64 - 1.0);
-        let y0 = (p0[1].min(p1[1]).min(p2[1]) - 0.5).ceil().max(0.0);
-        let y1 = (p0[1].max(p1[1]).max(p2[1]) - 0.5)
-            .floor()
-            .min(sh as f64 - 1.0);
-        if x0 > x1 || y0 > y1 {
-            continue;
-        }
         let base = base.map(|c| c as f32);
-        for py in y0 as usize..=y1 as usize {
-            let y = py as f64 + 0.5;
-            for px in x0 as usize..=x1 as usize {
-                let x = px as f64 + 0.5;
-                let b0 = edge(p1, p2, x, y) / area;
-                let b1 = edge(p2, p0, x, y) / area;
-                let b2 = edge(p0, p1, x, y) / area;
-                if b0 < 0.0 || b1 < 0.0 || b2 < 0.0 {
-                    continue;
-                }
-                let d = b0 * p0[2] + b1 * p1[2] + b2 * p2[2];
-                let k = py * sw + px;
-                if d >= depth[k] {
-                    continue;
-                }
-                depth[k] = d;
-                let mut nrm = (normals[i0] * b0 + normals[i1] * b1 + normals[i2] * b2)
-                    .try_normalize(1e-6)
-                    .unwrap_or(face_normal);
-                if nrm.dot(&proj.view) > 0.0 {
-                    nrm = -nrm;
-                }
-                let shade = (AMBIENT + (1.0 - AMBIENT) * nrm.dot(&light).max(0.0)) as f32;
-                color[k] = base.map(|c| c * shade);
-            }
-        }
+        buffer.triangle(
+            p,
+            [normals[i0], normals[i1], normals[i2]],
+            face_normal,
+            &lighting,
+            |_, _, _| base,
+        );
     }
-    let mut image = RgbImage::new(w, h, BACKGROUND);
-    let norm = 1.0 / (SS * SS) as f32;
-    for y in 0..h as usize {
-        for x in 0..w as usize {
-            let mut sum = [0f32; 3];
-            for dy in 0..SS {
-                for dx in 0..SS {
-                    let c = color[(y * SS + dy) * sw + x * SS + dx];
-                    for k in 0..3 {
-                        sum[k] += c[k];
-                    }
-                }
-            }
-            image.pixels[y * w as usize + x] =
-                sum.map(|s| (s * norm).round().clamp(0.0, 255.0) as u8);
-        }
-    }
-    image
+    buffer.downsample(SS, BACKGROUND)
 }
 
 /// Unit normal of face `f` of `mesh`, or `None` for a degenerate face.
