@@ -91,21 +91,30 @@ def close_holes(in_path, out_path, maxholesize: int | None = None) -> dict:
     t0 = time.perf_counter()
     ms.meshing_close_holes(maxholesize=int(maxholesize))
     seconds = time.perf_counter() - t0
+    return _result(
+        ms,
+        out_path,
+        method="close-holes",
+        input=str(in_path),
+        maxholesize=int(maxholesize),
+        seconds=seconds,
+        boundary_edges_in=boundary_edges_in,
+        boundary_loops_in=loops_in,
+    )
+
+
+def _result(ms, out_path, **fields) -> dict:
+    """Writes the current mesh of `ms` to `out_path` and returns `fields` with its measures."""
     m = ms.current_mesh()
     V2 = np.array(m.vertex_matrix(), np.float64)
     F2 = np.array(m.face_matrix(), np.int64)
     oracle.save_mesh(out_path, V2, F2)
     return {
-        "method": "close-holes",
-        "input": str(in_path),
+        **fields,
         "output": str(out_path),
-        "maxholesize": int(maxholesize),
-        "seconds": seconds,
         "vertices": int(len(V2)),
         "faces": int(len(F2)),
-        "boundary_edges_in": boundary_edges_in,
-        "boundary_loops_in": loops_in,
-        "boundary_loops": _loops(ms),
+        "boundary_loops": _loops(ms) if len(F2) else 0,
         **_judge(V2, F2),
     }
 
@@ -125,23 +134,16 @@ def poisson(in_path, out_path, depth: int = 8) -> dict:
     t0 = time.perf_counter()
     ms.generate_surface_reconstruction_screened_poisson(depth=int(depth), preclean=True)
     seconds = time.perf_counter() - t0
-    m = ms.current_mesh()
-    V2 = np.array(m.vertex_matrix(), np.float64)
-    F2 = np.array(m.face_matrix(), np.int64)
-    oracle.save_mesh(out_path, V2, F2)
-    return {
-        "method": "poisson",
-        "input": str(in_path),
-        "output": str(out_path),
-        "depth": int(depth),
-        "seconds": seconds,
-        "points": int(used.sum()),
-        "vertices": int(len(V2)),
-        "faces": int(len(F2)),
-        "boundary_loops_in": loops_in,
-        "boundary_loops": _loops(ms) if len(F2) else 0,
-        **_judge(V2, F2),
-    }
+    return _result(
+        ms,
+        out_path,
+        method="poisson",
+        input=str(in_path),
+        depth=int(depth),
+        seconds=seconds,
+        points=int(used.sum()),
+        boundary_loops_in=loops_in,
+    )
 
 
 def _parser() -> argparse.ArgumentParser:

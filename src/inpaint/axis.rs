@@ -14,30 +14,47 @@ use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 /// whose centroid lies between 1 and `shell` ball radii from its centre (`shell` > 1). None when
 /// no triangle lies there.
 pub fn estimate_axis(mesh: &TriMesh, ball: &Ball, shell: f64) -> Option<Vector3<f64>> {
-    let mut cov = Matrix3::zeros();
-    let mut found = false;
-    for f in 0..mesh.num_faces() {
-        let [a, b, c] = mesh.triangle(f);
-        let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
-        let r = (centroid - ball.center).norm() / ball.radius;
-        if !(1.0..=shell).contains(&r) {
-            continue;
-        }
-        let raw = mesh.face_normal_raw(f);
-        let area2 = raw.norm();
-        if area2 <= 0.0 {
-            continue;
-        }
-        let n = raw / area2;
-        cov += n * n.transpose() * area2;
-        found = true;
-    }
-    if !found {
+    let samples = normal_samples(mesh, |_, centroid| {
+        (1.0..=shell).contains(&((centroid - ball.center).norm() / ball.radius))
+    });
+    least_normal_axis(&samples)
+}
+
+/// (centroid, unit normal, twice the area) of the non-degenerate triangles `keep` selects (given
+/// the corners and the centroid).
+fn normal_samples(
+    mesh: &TriMesh,
+    keep: impl Fn(&[Point3<f64>; 3], &Point3<f64>) -> bool,
+) -> Vec<(Point3<f64>, Vector3<f64>, f64)> {
+    (0..mesh.num_faces())
+        .filter_map(|f| {
+            let corners = mesh.triangle(f);
+            let [a, b, c] = corners;
+            let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+            if !keep(&corners, &centroid) {
+                return None;
+            }
+            let raw = mesh.face_normal_raw(f);
+            let area2 = raw.norm();
+            (area2 > 0.0).then(|| (centroid, raw / area2, area2))
+        })
+        .collect()
+}
+
+/// The direction least represented among the normals: the eigenvector of the smallest eigenvalue
+/// of Σ A n nᵀ. None without samples.
+fn least_normal_axis(samples: &[(Point3<f64>, Vector3<f64>, f64)]) -> Option<Vector3<f64>> {
+    if samples.is_empty() {
         return None;
     }
+    let cov = samples
+        .iter()
+        .fold(Matrix3::zeros(), |m, (_, n, w)| m + n * n.transpose() * *w);
     let eig = SymmetricEigen::new(cov);
-    let k = eig.eigenvalues.imin();
-    Some(eig.eigenvectors.column(k).into_owned().normalize())
+    eig.eigenvectors
+        .column(eig.eigenvalues.imin())
+        .into_owned()
+        .try_normalize(1e-12)
 }
 
 /// A branch of the vessel where it crosses ∂D.
@@ -116,38 +133,16 @@ pub fn fit_cylinder(
     near: &Point3<f64>,
     reach: f64,
 ) -> Option<(Point3<f64>, Vector3<f64>, f64)> {
-    let mut picked = Vec::new();
-    let mut cov = Matrix3::zeros();
-    for f in 0..mesh.num_faces() {
-        let [a, b, c] = mesh.triangle(f);
-        if balls
+    let picked = normal_samples(mesh, |corners, centroid| {
+        !corners
             .iter()
-            .any(|ball| ball.contains(&a) || ball.contains(&b) || ball.contains(&c))
-        {
-            continue;
-        }
-        let centroid = Point3::from((a.coords + b.coords + c.coords) / 3.0);
-        if (centroid - near).norm() > reach {
-            continue;
-        }
-        let raw = mesh.face_normal_raw(f);
-        let area2 = raw.norm();
-        if area2 <= 0.0 {
-            continue;
-        }
-        let n = raw / area2;
-        cov += n * n.transpose() * area2;
-        picked.push((centroid, n, area2));
-    }
+            .any(|p| balls.iter().any(|ball| ball.contains(p)))
+            && (centroid - near).norm() <= reach
+    });
     if picked.len() < 3 {
         return None;
     }
-    let eig = SymmetricEigen::new(cov);
-    let axis = eig
-        .eigenvectors
-        .column(eig.eigenvalues.imin())
-        .into_owned()
-        .try_normalize(1e-12)?;
+    let axis = least_normal_axis(&picked)?;
     let total: f64 = picked.iter().map(|p| p.2).sum();
     let mut m = axis * axis.transpose() * total;
     let mut rhs = axis * axis.dot(&near.coords) * total;
