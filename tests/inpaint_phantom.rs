@@ -374,7 +374,7 @@ fn cli_writes_the_three_files() {
     let file: RegionsFile =
         serde_json::from_str(&std::fs::read_to_string(&regions).unwrap()).unwrap();
     assert_eq!(file.regions.len(), 1);
-    assert!((file.regions[0].radius - 2.5 * 1.2 * 2.0).abs() < 1e-9);
+    assert!((file.regions[0].radius - 3.0 * 1.2 * 2.0).abs() < 1e-9);
     assert_eq!(
         serde_json::to_value(file.regions[0]).unwrap(),
         report["regions"][0]
