@@ -117,6 +117,7 @@ fn phantoms_are_restored_within_the_acceptance_bounds() {
         );
         assert!(mesh_info(&r.mesh).watertight);
         assert_eq!(connected_components(&r.mesh).0, 1);
+        assert_manifold3d(&r.mesh);
         // At the bifurcation the patch's cross-sections near ∂D do not pair up with the holes
         // yet: the whole vessel is re-meshed there (reported as the fallback).
         if kind != PhantomKind::Bifurcation {
@@ -124,6 +125,15 @@ fn phantoms_are_restored_within_the_acceptance_bounds() {
             assert_outside_kept(&ph.damaged, &r.mesh, &ph.regions);
         }
     }
+}
+
+/// manifold3d's verdict on `mesh`: NoError (a closed oriented 2-manifold).
+fn assert_manifold3d(mesh: &TriMesh) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.stl");
+    vesselmsr::io::write_mesh(&path, mesh).unwrap();
+    let check = oracle().check(&path);
+    assert_eq!(check["manifold_status"], "NoError", "{check}");
 }
 
 #[test]
@@ -140,6 +150,7 @@ fn curved_gap_is_bridged_into_one_tube() {
     assert_eq!(connected_components(&r.mesh).0, 1);
     assert!(ve.abs() <= 0.10, "volume error {ve}");
     assert!(mesh_info(&r.mesh).watertight);
+    assert_manifold3d(&r.mesh);
     assert_outside_kept(&ph.damaged, &r.mesh, &ph.regions);
 }
 
@@ -377,4 +388,49 @@ fn cli_bad_input_exits_2_without_output() {
     for (args, word) in &cases {
         assert_fails(args, word, &out);
     }
+}
+
+#[test]
+fn real_coronary_stenosis_gets_a_tube_like_lumen_and_a_degree() {
+    // The real focal stenosis of ../shared/data/real/coronary_stenosis_xray.stl (SOURCES.md: near
+    // (26.0, −21.6, 68.2), mm), a 3 mm region around it.
+    let Some(dir) = common::real_dir() else {
+        return;
+    };
+    let input = common::read_real(&dir, "coronary_stenosis_xray.stl");
+    let ball = Ball {
+        center: Point3::new(26.0, -21.6, 68.2),
+        radius: 3.0,
+    };
+    let r = repair(&input, &[ball], &RepairOptions::default()).unwrap();
+    assert!(r.stitched, "{:?}", r.fallback);
+    assert_eq!(connected_components(&r.mesh).0, 1);
+    assert!(mesh_info(&r.mesh).watertight);
+    assert_manifold3d(&r.mesh);
+    assert_outside_kept(&r.closed_input, &r.mesh, &[ball]);
+    let reports = vesselmsr::report::repair_report::region_reports(
+        &r.closed_input,
+        &r.mesh,
+        &[ball],
+        &["region".into()],
+    );
+    let g = &reports[0];
+    println!(
+        "coronary: inpainted {:.3} mm³ ({:.2}%), diameter stenosis {:?}%, area {:?}%, NASCET {:?}%, min input diameter {:?} mm, output {:?} mm",
+        g.inpainted_volume,
+        100.0 * g.inpainted_fraction,
+        g.diameter_stenosis_pct,
+        g.area_stenosis_pct,
+        g.nascet_stenosis_pct,
+        g.min_input_diameter,
+        g.output_diameter_at_min
+    );
+    assert!(g.inpainted_volume > 0.0);
+    let d = g
+        .diameter_stenosis_pct
+        .expect("a section through the lesion");
+    assert!((30.0..70.0).contains(&d), "diameter stenosis {d}%");
+    // The restored lumen at the lesion is about the size of the vessel next to it.
+    let out = g.output_diameter_at_min.unwrap();
+    assert!((2.0..3.2).contains(&out), "restored diameter {out} mm");
 }
