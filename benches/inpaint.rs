@@ -29,20 +29,21 @@
 //!    blend; it stops at the filled φ), one run each; the ratio compares like with like: the
 //!    reference's seconds against our "voxelize" + "fill" phases (which also redistance).
 //!
-//! Measured 2026-12-02 (2 cores shared, load 3.8–5.9; 478 s in all):
+//! Measured 2026-12-02 (2 cores shared, load 1.4–2.4), after the chord axis, the junction fill
+//! and the band redistance:
 //! (a) Hausdorff in D (h) / volume error in D, axial | flow | msr | paper | close-holes | Poisson:
-//! tube 0.34/−0.4% | 1.09/+15.5% | 3.47/−16.3% | 5.18/−27.3% | 9.43/−24.8% | 9.38/−24.7%;
-//! curved 4.73/−5.8% | 7.89/−25.0% | 4.19/−23.6% | 7.13/−37.5% | 7.95/−34.0% | 7.94/−33.8%;
-//! bifurcation 3.69/−28.8% | 8.90/+48.7% | 5.79/+17.7% | 4.45/−0.4% | 6.31/−12.3% | 6.30/−12.2%;
-//! stenosis 0.07/−1.6% | 2.40/+29.3% | 3.98/−36.8% | 3.97/−35.1% | 4.03/−35.0% | 4.03/−34.9%;
-//! occlusion 0.02/−0.2% | 0.89/+15.3% | 1.12/−10.7% | 2.95/−24.7% | 7.97/−24.6% | 7.97/−24.5%.
-//! Best: axial on four, msr on the curved tube (axial close behind, and 6% in volume against
-//! 24%). Ours take 1–3 s (axial), 4–8 s (msr), 7–23 s (flow, paper); Poisson 4–42 s.
-//! (b) 13 cases (the aneurysm mesh gave 1 point away from its ends): medians axial 1.95 h /
-//! 4.5% (best on 12 of 13), msr 6.26 h / 36.5%, close-holes (= the damaged input) 11.9 h / 55%.
-//! (c) sub-box 115³ at h = 0.328: ours 5.2 s in all (voxelize 4.6 s, fill 0.58 s), the
-//! reference 10.6 s (libigl signed distance 8.9 s, fill 1.7 s): 2.1×; volume in D of the
-//! filled φ 1799.4 (reference) against 1797.7 (our repaired mesh, `volume_in_ball`).
+//! tube 0.23/−0.55% | 1.17/+16.8% | 3.49/−16.5% | 5.19/−27.5% | 9.43/−24.8% | 9.38/−24.7%;
+//! curved 4.61/−5.0% | 7.88/−26.2% | 4.15/−23.3% | 7.09/−37.4% | 7.95/−34.0% | 7.94/−33.8%;
+//! bifurcation 1.29/−2.9% | 8.90/+48.7% | 5.78/+17.8% | 4.45/−0.4% | 6.31/−12.3% | 6.30/−12.2%;
+//! stenosis 0.14/−2.0% | 2.41/+29.7% | 3.98/−36.9% | 3.97/−35.1% | 4.03/−35.0% | 4.03/−34.9%;
+//! occlusion 0.04/−0.3% | 0.92/+16.3% | 1.14/−10.9% | 2.97/−24.9% | 7.97/−24.6% | 7.97/−24.5%.
+//! Best: axial on four; on the curved tube msr by Hausdorff (axial close behind, and −5% in
+//! volume against −23%). axial takes 0.1–0.5 s, msr 0.6–2.5 s, flow and paper 2–13 s.
+//! (b) 13 cases (the aneurysm mesh gave 1 point away from its ends): medians axial 1.89 h /
+//! 4.4% (best on 12 of 13), msr 6.29 h / 36.7%, close-holes (= the damaged input) 11.9 h / 55%.
+//! (c) sub-box 82³ at h = 0.328 (both sides): ours 0.29 s in all (voxelize 0.18 s, fill 0.09 s),
+//! the reference 2.0 s (libigl signed distance 1.75 s, fill 0.23 s): 7.5× (goal 10×, not met);
+//! volume in D of the filled φ 1800.6 (reference) against 1798.6 (our repaired mesh).
 //!
 //! Run: `cargo bench --bench inpaint` (`-- phantoms` for (a) only, `-- real` for (b) and (c);
 //! $VESSELMSR_BENCH_FULL=1 adds `flow` and `paper` to (b)) (the baselines and the reference need reference/.venv,
