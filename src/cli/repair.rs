@@ -110,6 +110,7 @@ struct Parameters {
     keep_outside: bool,
     open_ends: bool,
     stitched: bool,
+    junctions: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     fallback: Option<String>,
     axes: Vec<[f64; 3]>,
@@ -244,6 +245,7 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
             keep_outside: opts.keep_outside,
             open_ends: opts.open_ends,
             stitched: result.stitched,
+            junctions: result.junctions,
             fallback: result.fallback.clone(),
             axes: result.axes.clone(),
         },

@@ -371,9 +371,8 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
                     .collect();
                 let only: Vec<bool> = depth
                     .iter()
-                    .zip(&g.data().to_vec())
                     .enumerate()
-                    .map(|(n, (&d, _))| d > 0.0 && nearest_ball(&phi0, balls, n) == k)
+                    .map(|(n, &d)| d > 0.0 && nearest_ball(&phi0, balls, n) == k)
                     .collect();
                 fill_junction(&mut g, &only, &branches)?;
                 junctions += 1;
