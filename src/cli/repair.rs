@@ -211,6 +211,7 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
     let measure_start = Instant::now();
     let regions = region_reports(&result.closed_input, &result.mesh, &balls, &sources);
     let info = mesh_info(&result.mesh);
+    let input_info = mesh_info(&result.closed_input);
     let measure_secs = measure_start.elapsed().as_secs_f64();
     let mut timings = serde_json::Map::new();
     timings.insert("read".into(), read_secs.into());
@@ -222,12 +223,12 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
         units: args.units.clone(),
         input: MeshPart {
             path: args.mesh.display().to_string(),
-            measures: surface_measures(&result.closed_input),
+            measures: surface_measures(&input_info),
         },
         input_capped: result.closed_input.num_faces() != mesh.num_faces(),
         output: MeshPart {
             path: args.output.display().to_string(),
-            measures: surface_measures(&result.mesh),
+            measures: surface_measures(&info),
         },
         regions,
         loops,

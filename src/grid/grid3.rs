@@ -129,3 +129,20 @@ fn check_voxel(transform: &GridTransform) -> Result<()> {
         )))
     }
 }
+
+/// The face neighbours (up to 6) of node `n` of a grid of `dims` (x fastest).
+pub fn face_neighbours(dims: [usize; 3], n: usize) -> impl Iterator<Item = usize> {
+    let [nx, ny, nz] = dims;
+    let (i, j, k) = (n % nx, (n / nx) % ny, n / (nx * ny));
+    let (sy, sz) = (nx, nx * ny);
+    [
+        (i > 0).then(|| n - 1),
+        (i + 1 < nx).then(|| n + 1),
+        (j > 0).then(|| n - sy),
+        (j + 1 < ny).then(|| n + sy),
+        (k > 0).then(|| n - sz),
+        (k + 1 < nz).then(|| n + sz),
+    ]
+    .into_iter()
+    .flatten()
+}

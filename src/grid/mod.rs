@@ -9,7 +9,7 @@ mod sample;
 pub mod spec;
 mod transform;
 
-pub use grid3::Grid3;
+pub use grid3::{face_neighbours, Grid3};
 pub use resize::SubBox;
 pub use spec::{grid_for_mesh, GridOptions, GridSpec};
 pub use transform::GridTransform;

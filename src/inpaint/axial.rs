@@ -8,7 +8,7 @@
 //! wall inside D are filled exactly; a gently curved vessel is filled with an error of the order
 //! of the sagitta of its axis over D. The curvature motion that follows smooths what is left.
 
-use super::region::Ball;
+use super::region::{deepest_ball, Ball};
 use crate::grid::Grid3;
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
@@ -44,16 +44,6 @@ pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vec<Vector3<f64>>]) -
     let [nx, ny, _] = phi.dims();
     let t = *phi.transform();
     let h = phi.voxel();
-    let depth = |p: &Point3<f64>| -> (f64, usize) {
-        let mut best = (f64::NEG_INFINITY, 0);
-        for (b, ball) in balls.iter().enumerate() {
-            let d = ball.radius - (p - ball.center).norm();
-            if d > best.0 {
-                best = (d, b);
-            }
-        }
-        best
-    };
     let source = phi.clone();
     // Where the line p + s·dir (s > 0) leaves the union of the balls: jump to the far side of
     // every ball that holds the current point until none does (exact; each jump leaves a ball
@@ -85,7 +75,7 @@ pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vec<Vector3<f64>>]) -
         .filter_map(|n| {
             let (i, j, k) = (n % nx, (n / nx) % ny, n / (nx * ny));
             let p = t.index_to_world(Vector3::new(i as f64, j as f64, k as f64));
-            let (d, b) = depth(&p);
+            let (d, b) = deepest_ball(balls, &p);
             if d <= 0.0 {
                 return None;
             }

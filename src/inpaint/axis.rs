@@ -1,5 +1,6 @@
 //! The vessel axis at a region D, estimated from the intact surface around it. Where a vessel
-//! crosses ∂D its surface leaves a boundary loop once D is cut out (`branch_crossings`): a tube
+//! crosses ∂D its surface leaves a boundary loop once D is cut out (`stitch::cut_out`,
+//! `branch_crossings`): a tube
 //! through D leaves two, and the chord between their centroids is its axis across D; a junction
 //! leaves three or more, each with its own axis. A chopped wall leaves one; there the axis is the
 //! direction least represented among the surface normals (on a tube every normal is
@@ -7,6 +8,7 @@
 //! normal covariance Σ A n nᵀ of the triangles in a shell just outside the ball (`estimate_axis`).
 
 use super::region::Ball;
+use super::stitch::CutOut;
 use crate::TriMesh;
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 
@@ -47,14 +49,11 @@ fn least_normal_axis(samples: &[(Point3<f64>, Vector3<f64>, f64)]) -> Option<Vec
     if samples.is_empty() {
         return None;
     }
-    let cov = samples
-        .iter()
-        .fold(Matrix3::zeros(), |m, (_, n, w)| m + n * n.transpose() * *w);
-    let eig = SymmetricEigen::new(cov);
-    eig.eigenvectors
-        .column(eig.eigenvalues.imin())
-        .into_owned()
-        .try_normalize(1e-12)
+    least_eigenvector(
+        samples
+            .iter()
+            .fold(Matrix3::zeros(), |m, (_, n, w)| m + n * n.transpose() * *w),
+    )
 }
 
 /// A branch of the vessel where it crosses ∂D.
@@ -68,58 +67,40 @@ pub struct BranchCrossing {
     pub ball: usize,
 }
 
-/// The branches of the vessel that cross ∂D: the boundary loops that removing the triangles with
-/// a vertex in D leaves in `mesh` (those within `reach` of D), each a cross-section of a branch
-/// whose axis is the normal of the loop's best-fit plane (the eigenvector of the smallest
-/// eigenvalue of the loop vertices' covariance).
-pub fn branch_crossings(mesh: &TriMesh, balls: &[Ball], reach: f64) -> Vec<BranchCrossing> {
-    let inside: Vec<bool> = mesh
-        .vertices
-        .iter()
-        .map(|p| balls.iter().any(|b| b.contains(p)))
-        .collect();
-    let kept = TriMesh::new(
-        mesh.vertices.clone(),
-        mesh.faces
-            .iter()
-            .filter(|f| f.iter().all(|&v| !inside[v as usize]))
-            .copied()
-            .collect(),
-    );
+/// The branches of the vessel that cross ∂D: the holes that cutting D out of the mesh left
+/// (`cut`), each a cross-section of a branch whose axis is the normal of the loop's best-fit
+/// plane (the eigenvector of the smallest eigenvalue of the loop vertices' covariance).
+pub fn branch_crossings(cut: &CutOut, balls: &[Ball]) -> Vec<BranchCrossing> {
     let gap = |p: &Point3<f64>, b: &Ball| (p - b.center).norm() - b.radius;
-    crate::mesh::topology::boundary_loops(&kept)
-        .into_iter()
-        .filter(|lp| {
-            lp.len() >= 3
-                && lp.iter().all(|&v| {
-                    balls
-                        .iter()
-                        .any(|b| gap(&kept.vertices[v as usize], b) < reach)
-                })
-        })
+    let vertices = &cut.kept.vertices;
+    cut.holes
+        .iter()
+        .filter(|lp| lp.len() >= 3)
         .filter_map(|lp| {
-            let n = lp.len() as f64;
-            let c = lp.iter().fold(Vector3::zeros(), |s, &v| {
-                s + kept.vertices[v as usize].coords
-            }) / n;
-            let mut cov = Matrix3::zeros();
-            for &v in &lp {
-                let d = kept.vertices[v as usize].coords - c;
-                cov += d * d.transpose();
-            }
-            let eig = SymmetricEigen::new(cov);
-            let k = eig.eigenvalues.imin();
-            let axis = eig
-                .eigenvectors
-                .column(k)
-                .into_owned()
-                .try_normalize(1e-12)?;
+            let c = lp
+                .iter()
+                .fold(Vector3::zeros(), |s, &v| s + vertices[v as usize].coords)
+                / lp.len() as f64;
+            let cov = lp.iter().fold(Matrix3::zeros(), |m, &v| {
+                let d = vertices[v as usize].coords - c;
+                m + d * d.transpose()
+            });
+            let axis = least_eigenvector(cov)?;
             let center = Point3::from(c);
             let ball = (0..balls.len())
                 .min_by(|&a, &b| gap(&center, &balls[a]).total_cmp(&gap(&center, &balls[b])))?;
             Some(BranchCrossing { center, axis, ball })
         })
         .collect()
+}
+
+/// The unit eigenvector of the smallest eigenvalue of a symmetric matrix.
+fn least_eigenvector(m: Matrix3<f64>) -> Option<Vector3<f64>> {
+    let eig = SymmetricEigen::new(m);
+    eig.eigenvectors
+        .column(eig.eigenvalues.imin())
+        .into_owned()
+        .try_normalize(1e-12)
 }
 
 /// A cylinder fitted to the triangles of `mesh` outside the balls whose centroid lies within

@@ -8,7 +8,7 @@
 //! then red-black successive over-relaxation with the optimal factor for the region's size.
 //! Nodes on the grid's border see only the neighbours they have (a zero-flux border).
 
-use crate::grid::Grid3;
+use crate::grid::{face_neighbours, Grid3};
 use crate::{Error, Result};
 
 /// Options of [`fill_harmonic`].
@@ -51,7 +51,7 @@ pub fn fill_harmonic(
     unknown: &[bool],
     opts: &HarmonicOptions,
 ) -> Result<HarmonicReport> {
-    let [nx, ny, nz] = field.dims();
+    let [nx, ny, _] = field.dims();
     if unknown.len() != field.data().len() {
         return Err(Error::Geometry(format!(
             "harmonic fill: mask of {} nodes for a grid of {}",
@@ -68,32 +68,8 @@ pub fn fill_harmonic(
             converged: true,
         });
     }
-    let sx = 1usize;
-    let sy = nx;
+    let dims = field.dims();
     let sz = nx * ny;
-    let neighbours = |n: usize| {
-        let (i, j, k) = (n % nx, (n / nx) % ny, n / sz);
-        let mut out = [usize::MAX; 6];
-        if i > 0 {
-            out[0] = n - sx;
-        }
-        if i + 1 < nx {
-            out[1] = n + sx;
-        }
-        if j > 0 {
-            out[2] = n - sy;
-        }
-        if j + 1 < ny {
-            out[3] = n + sy;
-        }
-        if k > 0 {
-            out[4] = n - sz;
-        }
-        if k + 1 < nz {
-            out[5] = n + sz;
-        }
-        out
-    };
     // Initial guess: breadth-first layers from the known nodes, each node the mean of its
     // already-set neighbours.
     let mut set: Vec<bool> = unknown.iter().map(|&u| !u).collect();
@@ -104,8 +80,8 @@ pub fn fill_harmonic(
         let mut waiting = Vec::new();
         for &n in &frontier {
             let (mut sum, mut count) = (0.0f64, 0);
-            for m in neighbours(n) {
-                if m != usize::MAX && set[m] {
+            for m in face_neighbours(dims, n) {
+                if set[m] {
                     sum += data[m] as f64;
                     count += 1;
                 }
@@ -157,11 +133,9 @@ pub fn fill_harmonic(
         for half in [&red, &black] {
             for &n in half.iter() {
                 let (mut sum, mut count) = (0.0f64, 0);
-                for m in neighbours(n) {
-                    if m != usize::MAX {
-                        sum += data[m] as f64;
-                        count += 1;
-                    }
+                for m in face_neighbours(dims, n) {
+                    sum += data[m] as f64;
+                    count += 1;
                 }
                 let old = data[n] as f64;
                 let new = old + omega * (sum / count as f64 - old);

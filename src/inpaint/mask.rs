@@ -2,7 +2,7 @@
 //! inside the union of balls, which nodes are unknown, and the weight that blends the inpainted
 //! field into the known one over a band inside ∂D so that no seam appears at the boundary.
 
-use super::region::Ball;
+use super::region::{depth_in, Ball};
 use crate::grid::Grid3;
 use rayon::prelude::*;
 
@@ -19,11 +19,7 @@ pub fn region_depth(grid: &Grid3, balls: &[Ball]) -> Vec<f32> {
             for j in 0..ny {
                 for i in 0..nx {
                     let p = t.index_to_world(nalgebra::Vector3::new(i as f64, j as f64, k as f64));
-                    let d = balls
-                        .iter()
-                        .map(|b| b.radius - (p - b.center).norm())
-                        .fold(f64::NEG_INFINITY, f64::max);
-                    slab[i + nx * j] = d as f32;
+                    slab[i + nx * j] = depth_in(balls, &p) as f32;
                 }
             }
         });

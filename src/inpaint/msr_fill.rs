@@ -62,6 +62,30 @@ pub fn coarse_level(phi0: &Grid3, opts: &MsrFillOptions) -> Result<Grid3> {
     Ok(base)
 }
 
+/// The MSR round trip with one coarse level: B = the coarse level of `phi`, Δ = φ − B, then
+/// `transfer` changes Δ (the harmonic fill across D here; the viscosity of IMST in Algorithm 4 as
+/// written), and B + Δ̃ is returned with what `transfer` reported.
+pub fn transfer_details<T>(
+    phi: &Grid3,
+    opts: &MsrFillOptions,
+    transfer: impl FnOnce(&mut Grid3) -> Result<T>,
+) -> Result<(Grid3, T)> {
+    let base = coarse_level(phi, opts)?;
+    let mut detail = phi.clone();
+    detail
+        .data_mut()
+        .par_iter_mut()
+        .zip(base.data().par_iter())
+        .for_each(|(d, &b)| *d -= b);
+    let report = transfer(&mut detail)?;
+    let mut psi = base;
+    psi.data_mut()
+        .par_iter_mut()
+        .zip(detail.data().par_iter())
+        .for_each(|(p, &d)| *p += d);
+    Ok((psi, report))
+}
+
 /// ψ = B + Δ̃ (steps 1–3 of the module docs), not yet blended nor redistanced. `phi0` must be a
 /// signed distance (not clamped far from the surface: the details compare true distances);
 /// `unknown` marks the nodes of D.
@@ -70,18 +94,8 @@ pub fn fill_msr(
     unknown: &[bool],
     opts: &MsrFillOptions,
 ) -> Result<(Grid3, MsrFillReport)> {
-    let base = coarse_level(phi0, opts)?;
-    let mut detail = phi0.clone();
-    detail
-        .data_mut()
-        .par_iter_mut()
-        .zip(base.data().par_iter())
-        .for_each(|(d, &b)| *d -= b);
-    let harmonic = fill_harmonic(&mut detail, unknown, &opts.harmonic)?;
-    let mut psi = base;
-    psi.data_mut()
-        .par_iter_mut()
-        .zip(detail.data().par_iter())
-        .for_each(|(p, &d)| *p += d);
+    let (psi, harmonic) = transfer_details(phi0, opts, |detail| {
+        fill_harmonic(detail, unknown, &opts.harmonic)
+    })?;
     Ok((psi, MsrFillReport { harmonic }))
 }

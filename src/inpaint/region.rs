@@ -36,6 +36,24 @@ impl Ball {
     }
 }
 
+/// How deep `p` lies in the union of `balls`: the largest r − |p − c| (positive inside D, world
+/// units), and the index of the ball that gives it. (−∞, 0) without balls.
+pub fn deepest_ball(balls: &[Ball], p: &Point3<f64>) -> (f64, usize) {
+    let mut best = (f64::NEG_INFINITY, 0);
+    for (b, ball) in balls.iter().enumerate() {
+        let d = ball.radius - (p - ball.center).norm();
+        if d > best.0 {
+            best = (d, b);
+        }
+    }
+    best
+}
+
+/// How deep `p` lies in the union of `balls` (see [`deepest_ball`]).
+pub fn depth_in(balls: &[Ball], p: &Point3<f64>) -> f64 {
+    deepest_ball(balls, p).0
+}
+
 /// One ball as written in a regions file.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

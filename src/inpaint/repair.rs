@@ -17,9 +17,9 @@ use super::axial::fill_axial;
 use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::junction::{fill_junction, Branch};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
-use super::msr_fill::{coarse_level, fill_msr, MsrFillOptions};
-use super::region::Ball;
-use super::stitch::stitch_patch;
+use super::msr_fill::{fill_msr, transfer_details, MsrFillOptions};
+use super::region::{deepest_ball, Ball};
+use super::stitch::{cut_out, stitch_patch};
 use super::topology::remove_islands;
 use crate::grid::{spec::default_voxel, Grid3, GridTransform};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
@@ -181,8 +181,7 @@ pub struct Repair {
 /// Sub-box margin around D beyond the balls, in voxels (the fills that grow the shape add half
 /// the largest radius and their growth c·T).
 const MARGIN_VOXELS: f64 = 6.0;
-/// The patch is cut this many voxels inside ∂D before it is stitched (the first depth that
-/// stitches cleanly is taken).
+/// The depths, in voxels inside ∂D, at which the patch is cut to be stitched (tried in turn).
 const STITCH_MARGINS_VOXELS: [f64; 5] = [1.5, 1.0, 0.75, 2.5, 3.5];
 
 /// Repairs `mesh` inside the union of `balls` (see the module docs).
@@ -266,17 +265,22 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     }
     let sub_origin = origin + Vector3::new(first[0] as f64, first[1] as f64, first[2] as f64) * h;
     let transform = GridTransform::new(sub_origin, h);
+    let redistance_full = |g: &mut Grid3| {
+        redistance(
+            g,
+            &RedistanceOptions {
+                band: None,
+                ..RedistanceOptions::default()
+            },
+        )
+        .map(|_| ())
+    };
     let mut phi0 = voxelize(&closed_input, dims, transform, &VoxelizeOptions::default())?;
     // True distances away from the surface too: the fills compare and interpolate them.
-    redistance(
-        &mut phi0,
-        &RedistanceOptions {
-            band: None,
-            ..RedistanceOptions::default()
-        },
-    )?;
+    redistance_full(&mut phi0)?;
     lap("voxelize", &mut timings);
     let depth = region_depth(&phi0, balls);
+    let cut = cut_out(&closed_input, balls);
     let unknown = region_mask(&depth);
     // R: the largest inside distance in a shell just outside D.
     let radius_estimate = phi0
@@ -301,16 +305,6 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         harmonic: Default::default(),
     };
     let weights = blend_weights(&depth, opts.blend_voxels * h);
-    let redistance_full = |g: &mut Grid3| {
-        redistance(
-            g,
-            &RedistanceOptions {
-                band: None,
-                ..RedistanceOptions::default()
-            },
-        )
-        .map(|_| ())
-    };
     let mut axes = Vec::new();
     let mut junctions = 0;
     let mut iterations = 1;
@@ -320,8 +314,7 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
             // Per ball: a tube through it (two crossings) takes the chord between them; a
             // junction (three or more) tries each branch's axis; otherwise (a chopped wall) the
             // axis of the intact surface around the ball.
-            let crossings =
-                branch_crossings(&closed_input, balls, 2.0 * mean_edge_length(&closed_input));
+            let crossings = branch_crossings(&cut, balls);
             let mut candidates = Vec::new();
             for (k, b) in balls.iter().enumerate() {
                 let mine: Vec<_> = crossings.iter().filter(|c| c.ball == k).collect();
@@ -372,7 +365,10 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
                 let only: Vec<bool> = depth
                     .iter()
                     .enumerate()
-                    .map(|(n, &d)| d > 0.0 && nearest_ball(&phi0, balls, n) == k)
+                    .map(|(n, &d)| {
+                        let [i, j, l] = phi0.coords(n);
+                        d > 0.0 && deepest_ball(balls, &phi0.world(i, j, l)).1 == k
+                    })
                     .collect();
                 fill_junction(&mut g, &only, &branches)?;
                 junctions += 1;
@@ -403,16 +399,9 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
             iterations = 0;
             while iterations < opts.max_iterations.max(1) {
                 iterations += 1;
-                let base = coarse_level(&psi, &fill_opts)?;
-                let mut detail = psi.clone();
-                for (d, &b) in detail.data_mut().iter_mut().zip(base.data()) {
-                    *d -= b;
-                }
-                diffuse(&mut detail, eps, &Default::default())?;
-                let mut next = base;
-                for (p, &d) in next.data_mut().iter_mut().zip(detail.data()) {
-                    *p += d;
-                }
+                let (mut next, ()) = transfer_details(&psi, &fill_opts, |detail| {
+                    diffuse(detail, eps, &Default::default())
+                })?;
                 blend_known(&mut next, &phi0, &weights);
                 redistance_full(&mut next)?;
                 let moved = zero_set_motion(&psi, &next, &unknown);
@@ -438,36 +427,22 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     )?;
     lap("fill", &mut timings);
     let patch = extract_surface(&psi, &ExtractOptions::default())?;
-    let mut fallback = None;
-    let mut stitched = false;
-    let mut out = None;
-    if opts.keep_outside {
-        // Cut the patch at a few depths: near a junction the branches' cross-sections may merge
-        // at one depth and not at another.
-        for margin in STITCH_MARGINS_VOXELS {
-            match stitch_patch(&closed_input, &patch, balls, margin * h) {
-                Ok(m) => {
-                    out = Some(m);
-                    stitched = true;
-                    fallback = None;
-                    break;
-                }
-                Err(e) => {
-                    if fallback.is_none() {
-                        fallback = Some(e.to_string());
-                    }
-                }
-            }
-        }
-    }
-    let mesh_out = match out {
-        Some(m) => m,
-        None => remesh_whole(&closed_input, &psi, &depth, origin, whole_dims, first, h)?,
+    // Stitched into the kept triangles, or (without keep_outside, or when that fails) the whole
+    // vessel re-meshed.
+    let stitch = opts
+        .keep_outside
+        .then(|| stitch_patch(&cut, &patch, balls, &STITCH_MARGINS_VOXELS.map(|m| m * h)));
+    let stitched = matches!(stitch, Some(Ok(_)));
+    let (mesh_out, fallback) = match stitch {
+        Some(Ok(m)) => (m, None),
+        other => (
+            remesh_whole(&closed_input, &psi, &depth, origin, whole_dims, first, h)?,
+            other.and_then(|r| r.err()).map(|e| e.to_string()),
+        ),
     };
     lap("mesh", &mut timings);
-    let before = EdgeMap::new(&closed_input).boundary_edges();
     let edges = EdgeMap::new(&mesh_out);
-    if edges.boundary_edges() > before || edges.non_manifold_edges() > 0 {
+    if edges.boundary_edges() > cut.open_edges || edges.non_manifold_edges() > 0 {
         return Err(Error::Geometry(format!(
             "the repaired surface is not closed: {} open and {} non-manifold edges",
             edges.boundary_edges(),
@@ -491,23 +466,6 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         fallback,
         timings,
     })
-}
-
-/// The ball in which node `n` of `grid` lies deepest.
-fn nearest_ball(grid: &Grid3, balls: &[Ball], n: usize) -> usize {
-    let [nx, ny, _] = grid.dims();
-    let p = grid.transform().index_to_world(Vector3::new(
-        (n % nx) as f64,
-        ((n / nx) % ny) as f64,
-        (n / (nx * ny)) as f64,
-    ));
-    (0..balls.len())
-        .max_by(|&a, &b| {
-            let da = balls[a].radius - (p - balls[a].center).norm();
-            let db = balls[b].radius - (p - balls[b].center).norm();
-            da.total_cmp(&db)
-        })
-        .unwrap_or(0)
 }
 
 /// Largest change of φ at the nodes of D next to the zero level set of either field (world units).

@@ -5,19 +5,11 @@
 //! along whichever loop gives the shorter new edge). The result is checked (closed where the input
 //! was, manifold, consistently oriented); the caller falls back to the full re-mesh otherwise.
 
-use super::region::Ball;
+use super::region::{depth_in, Ball};
 use crate::mesh::topology::{boundary_loops, EdgeMap};
 use crate::{Error, Result, TriMesh};
 use nalgebra::Point3;
 use std::collections::{HashMap, HashSet};
-
-/// Depth of `p` inside the union of `balls` (positive inside), world units.
-pub fn depth_in(balls: &[Ball], p: &Point3<f64>) -> f64 {
-    balls
-        .iter()
-        .map(|b| b.radius - (p - b.center).norm())
-        .fold(f64::NEG_INFINITY, f64::max)
-}
 
 /// The part of `mesh` made of the faces `keep` selects, its vertices renumbered compactly.
 fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> TriMesh {
@@ -35,18 +27,56 @@ fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> TriMesh {
     out
 }
 
-/// A boundary loop turned so that consecutive vertices a→b are a directed edge of a face.
-fn directed_loop(mesh: &TriMesh, lp: &[u32]) -> Vec<u32> {
-    let mut directed: HashSet<(u32, u32)> = HashSet::new();
-    for f in &mesh.faces {
-        for k in 0..3 {
-            directed.insert((f[k], f[(k + 1) % 3]));
-        }
-    }
-    if lp.len() >= 2 && directed.contains(&(lp[0], lp[1])) {
-        lp.to_vec()
-    } else {
-        lp.iter().rev().copied().collect()
+/// The boundary loops of `mesh` that `keep` selects, each turned so that consecutive vertices
+/// a→b are a directed edge of a face.
+fn directed_loops(mesh: &TriMesh, keep: impl Fn(&[u32]) -> bool) -> Vec<Vec<u32>> {
+    let directed: HashSet<(u32, u32)> = mesh
+        .faces
+        .iter()
+        .flat_map(|f| (0..3).map(move |k| (f[k], f[(k + 1) % 3])))
+        .collect();
+    boundary_loops(mesh)
+        .into_iter()
+        .filter(|lp| keep(lp))
+        .map(|lp| {
+            if lp.len() >= 2 && directed.contains(&(lp[0], lp[1])) {
+                lp
+            } else {
+                lp.into_iter().rev().collect()
+            }
+        })
+        .collect()
+}
+
+/// The input with D cut out: its triangles with every vertex outside D (vertices renumbered), and
+/// the holes that removal left (its boundary loops with a vertex within two mean edges of D), each
+/// directed along its faces. Shared by the stitch and by the branch crossings of `axis`.
+pub struct CutOut {
+    /// The kept triangles.
+    pub kept: TriMesh,
+    /// The holes around D, as vertex loops of `kept`.
+    pub holes: Vec<Vec<u32>>,
+    /// Open edges of the whole input (its open vessel ends, when kept open).
+    pub open_edges: usize,
+}
+
+/// Cuts D out of `mesh` (see [`CutOut`]).
+pub fn cut_out(mesh: &TriMesh, balls: &[Ball]) -> CutOut {
+    let inside: Vec<bool> = mesh
+        .vertices
+        .iter()
+        .map(|p| depth_in(balls, p) > 0.0)
+        .collect();
+    let kept = submesh(mesh, |f| f.iter().all(|&v| !inside[v as usize]));
+    let reach = 2.0 * crate::mesh::measures::mean_edge_length(mesh);
+    let holes = directed_loops(&kept, |lp| {
+        lp.iter()
+            .any(|&v| depth_in(balls, &kept.vertices[v as usize]) > -reach)
+    });
+    CutOut {
+        kept,
+        holes,
+        open_edges: EdgeMap::new(mesh).boundary_edges(),
     }
 }
 
@@ -96,39 +126,37 @@ fn zipper(verts: &[Point3<f64>], a: &[u32], b: &[u32]) -> Vec<[u32; 3]> {
     faces
 }
 
-/// The stitched mesh (see the module docs): `original` (the input, closed or with the open ends
-/// it should keep), `patch` (a closed surface: the marching cubes of the inpainted φ), `balls` (D),
-/// `margin` (world units: how far inside D the patch is cut). Errors when the holes and the patch
-/// loops do not pair up one to one or the result is not a clean surface.
+/// The stitched mesh (see the module docs): `cut` (the input with D cut out), `patch` (a closed
+/// surface: the marching cubes of the inpainted φ), `balls` (D), `margins` (world units: the
+/// depths inside D at which the patch is cut, tried in turn; near a junction the branches'
+/// cross-sections may merge at one depth and not at another). Errors (with the first depth's
+/// reason) when at no depth the holes and the patch loops pair up one to one into a clean surface.
 pub fn stitch_patch(
-    original: &TriMesh,
+    cut: &CutOut,
     patch: &TriMesh,
     balls: &[Ball],
-    margin: f64,
+    margins: &[f64],
 ) -> Result<TriMesh> {
-    let inside: Vec<bool> = original
-        .vertices
-        .iter()
-        .map(|p| depth_in(balls, p) > 0.0)
-        .collect();
-    let kept = submesh(original, |f| f.iter().all(|&v| !inside[v as usize]));
-    let cut = submesh(patch, |f| {
+    let mut first_error = None;
+    for &margin in margins {
+        match stitch_at(cut, patch, balls, margin) {
+            Ok(mesh) => return Ok(mesh),
+            Err(e) => {
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    Err(first_error.unwrap_or_else(|| Error::Geometry("stitching: no cut depth given".into())))
+}
+
+/// [`stitch_patch`] with the patch cut at one depth.
+fn stitch_at(cut: &CutOut, patch: &TriMesh, balls: &[Ball], margin: f64) -> Result<TriMesh> {
+    let (kept, holes) = (&cut.kept, &cut.holes);
+    let part = submesh(patch, |f| {
         f.iter()
             .all(|&v| depth_in(balls, &patch.vertices[v as usize]) > margin)
     });
-    let before = EdgeMap::new(original).boundary_edges();
-    // The holes the removal made: loops of the kept part with a vertex within two mean edges of D.
-    let reach = 2.0 * crate::mesh::measures::mean_edge_length(original);
-    let near = |p: &Point3<f64>| depth_in(balls, p) > -reach;
-    let holes: Vec<Vec<u32>> = boundary_loops(&kept)
-        .into_iter()
-        .filter(|lp| lp.iter().any(|&v| near(&kept.vertices[v as usize])))
-        .map(|lp| directed_loop(&kept, &lp))
-        .collect();
-    let rims: Vec<Vec<u32>> = boundary_loops(&cut)
-        .into_iter()
-        .map(|lp| directed_loop(&cut, &lp))
-        .collect();
+    let rims = directed_loops(&part, |_| true);
     if holes.len() != rims.len() || holes.is_empty() {
         return Err(Error::Geometry(format!(
             "stitching: {} holes around D but {} patch loops",
@@ -138,15 +166,15 @@ pub fn stitch_patch(
     }
     let offset = kept.vertices.len() as u32;
     let mut out = kept.clone();
-    out.append(&cut);
+    out.append(&part);
     let mut free: Vec<bool> = vec![true; rims.len()];
-    for hole in &holes {
-        let c = centroid(&kept, hole);
+    for hole in holes {
+        let c = centroid(kept, hole);
         let (r, _) = rims
             .iter()
             .enumerate()
             .filter(|(r, _)| free[*r])
-            .map(|(r, lp)| (r, (centroid(&cut, lp) - c).norm()))
+            .map(|(r, lp)| (r, (centroid(&part, lp) - c).norm()))
             .min_by(|x, y| x.1.total_cmp(&y.1))
             .ok_or_else(|| Error::Geometry("stitching: no patch loop left".into()))?;
         free[r] = false;
@@ -156,7 +184,7 @@ pub fn stitch_patch(
     let edges = EdgeMap::new(&out);
     if edges.non_manifold_edges() > 0
         || !edges.is_consistently_oriented()
-        || edges.boundary_edges() > before
+        || edges.boundary_edges() > cut.open_edges
         || edges.non_manifold_vertices() > 0
     {
         return Err(Error::Geometry(format!(

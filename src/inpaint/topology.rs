@@ -3,14 +3,14 @@
 //! within D touches none of the known data: debris floating in D, or a void sealed in the lumen.
 //! Both are removed by flipping their nodes to the other side (6-connected flood fill).
 
-use crate::grid::Grid3;
+use crate::grid::{face_neighbours, Grid3};
 
 /// Flips the components of the inside and of the outside of `phi` that contain no node outside D
 /// (`unknown` marks D). Returns how many nodes were flipped.
 pub fn remove_islands(phi: &mut Grid3, unknown: &[bool]) -> usize {
-    let [nx, ny, nz] = phi.dims();
+    let dims = phi.dims();
     let h = phi.voxel() as f32;
-    let n = nx * ny * nz;
+    let n = phi.data().len();
     let mut flipped = 0;
     for inside in [true, false] {
         let side = |v: f32| (v < 0.0) == inside;
@@ -28,30 +28,11 @@ pub fn remove_islands(phi: &mut Grid3, unknown: &[bool]) -> usize {
             while let Some(v) = stack.pop() {
                 members.push(v);
                 anchored |= !unknown[v];
-                let (i, j, k) = (v % nx, (v / nx) % ny, v / (nx * ny));
-                let mut visit = |w: usize| {
+                for w in face_neighbours(dims, v) {
                     if label[w] == u32::MAX && side(phi.data()[w]) {
                         label[w] = next;
                         stack.push(w);
                     }
-                };
-                if i > 0 {
-                    visit(v - 1);
-                }
-                if i + 1 < nx {
-                    visit(v + 1);
-                }
-                if j > 0 {
-                    visit(v - nx);
-                }
-                if j + 1 < ny {
-                    visit(v + nx);
-                }
-                if k > 0 {
-                    visit(v - nx * ny);
-                }
-                if k + 1 < nz {
-                    visit(v + nx * ny);
                 }
             }
             next += 1;

@@ -14,7 +14,7 @@
 //! the cavities only when the input has none).
 
 use super::marching_cubes::{extract_surface, ExtractOptions};
-use crate::grid::Grid3;
+use crate::grid::{face_neighbours, Grid3};
 use crate::mesh::measures::component_nesting_depths;
 use crate::mesh::topology::connected_components;
 use crate::{Result, TriMesh};
@@ -133,7 +133,7 @@ fn flood_outside(phi: &Grid3, label: &mut [u8], seeds: Vec<usize>, mark: u8) -> 
     }
     while let Some(n) = stack.pop() {
         region.push(n);
-        for m in neighbours(phi, n) {
+        for m in face_neighbours(phi.dims(), n) {
             if label[m] == UNSEEN && phi.data()[m] > 0.0 {
                 label[m] = mark;
                 stack.push(m);
@@ -168,7 +168,7 @@ fn cheapest_path_out(phi: &Grid3, label: &[u8], start: &[usize]) -> Vec<usize> {
             }
             return path;
         }
-        for m in neighbours(phi, n) {
+        for m in face_neighbours(phi.dims(), n) {
             // Non-negative f32 costs order like their bit patterns.
             let dm = d + cost(m);
             if best.get(&m).is_none_or(|&(b, _)| dm < b) {
@@ -178,23 +178,6 @@ fn cheapest_path_out(phi: &Grid3, label: &[u8], start: &[usize]) -> Vec<usize> {
         }
     }
     Vec::new()
-}
-
-/// The 6 face neighbours of node `n` inside the grid.
-fn neighbours(phi: &Grid3, n: usize) -> impl Iterator<Item = usize> {
-    let [nx, ny, nz] = phi.dims();
-    let [i, j, k] = phi.coords(n);
-    let (sy, sz) = (nx, nx * ny);
-    [
-        (i > 0).then(|| n - 1),
-        (i + 1 < nx).then(|| n + 1),
-        (j > 0).then(|| n - sy),
-        (j + 1 < ny).then(|| n + sy),
-        (k > 0).then(|| n - sz),
-        (k + 1 < nz).then(|| n + sz),
-    ]
-    .into_iter()
-    .flatten()
 }
 
 /// The grid nodes at the corners of the cell holding `p`.

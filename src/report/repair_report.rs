@@ -6,8 +6,8 @@
 use super::stenosis::{measure_stenosis_with, volume_in_ball_with, StenosisOptions};
 use crate::bvh::{WindingNumber, WindingOptions};
 use crate::inpaint::region::Ball;
+use crate::mesh::info::MeshInfo;
 use crate::mesh::measures::signed_volume;
-use crate::mesh::topology::{connected_components, EdgeMap};
 use crate::TriMesh;
 use serde::Serialize;
 
@@ -59,12 +59,12 @@ pub struct SurfaceMeasures {
     pub boundary_edges: usize,
 }
 
-/// Measures `mesh`.
-pub fn surface_measures(mesh: &TriMesh) -> SurfaceMeasures {
+/// The measures of the report, from the mesh's [`MeshInfo`].
+pub fn surface_measures(info: &MeshInfo) -> SurfaceMeasures {
     SurfaceMeasures {
-        volume: signed_volume(mesh),
-        components: connected_components(mesh).0,
-        boundary_edges: EdgeMap::new(mesh).boundary_edges(),
+        volume: info.signed_volume,
+        components: info.components,
+        boundary_edges: info.boundary_edges,
     }
 }
 
