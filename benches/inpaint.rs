@@ -45,7 +45,8 @@
 //! the reference 2.0 s (libigl signed distance 1.75 s, fill 0.23 s): 7.5× (goal 10×, not met);
 //! volume in D of the filled φ 1800.6 (reference) against 1798.6 (our repaired mesh).
 //!
-//! Run: `cargo bench --bench inpaint` (`-- phantoms` for (a) only, `-- real` for (b) and (c);
+//! Run: `cargo bench --bench inpaint` (`-- phantoms` for (a) only, `-- real` for (b), `-- speed`
+//! for (c);
 //! $VESSELMSR_BENCH_FULL=1 adds `flow` and `paper` to (b)) (the baselines and the reference need reference/.venv,
 //! which `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON; without it only our methods run).
 
@@ -53,6 +54,7 @@ mod common;
 
 use common::Reference;
 use nalgebra::Point3;
+use std::collections::HashSet;
 use std::ffi::OsString;
 use std::path::Path;
 use std::time::Instant;
@@ -60,7 +62,7 @@ use vesselmsr::bvh::MeshBvh;
 use vesselmsr::grid::{grid_for_mesh, Grid3, GridOptions};
 use vesselmsr::inpaint::phantom::{make_phantom, PhantomKind, PhantomOptions, SplitMix};
 use vesselmsr::inpaint::region::{local_vessel_radius, Ball};
-use vesselmsr::inpaint::repair::{repair, InpaintMethod, RepairOptions};
+use vesselmsr::inpaint::repair::{repair, InpaintMethod, Repair, RepairOptions};
 use vesselmsr::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
 use vesselmsr::mesh::cap::{cap_holes, CapOptions};
@@ -185,12 +187,13 @@ fn run_all(
     h: f64,
     reference: Option<&Reference>,
     which: Which,
-) -> Vec<Option<Score>> {
+) -> (Vec<Option<Score>>, Option<Repair>) {
     let Which {
         slow: with_slow,
         poisson: with_poisson,
     } = which;
     let mut scores = Vec::new();
+    let mut default_output = None;
     for method in InpaintMethod::ALL {
         if !with_slow && matches!(method, InpaintMethod::Flow | InpaintMethod::Paper) {
             scores.push(None);
@@ -206,6 +209,9 @@ fn run_all(
             Ok(r) => {
                 let s = start.elapsed().as_secs_f64();
                 scores.push(Some(score(&r.mesh, truth, balls, h, s)));
+                if method == RepairOptions::default().method {
+                    default_output = Some(r);
+                }
             }
             Err(e) => {
                 println!("  {case} {method}: failed: {e}");
@@ -215,7 +221,7 @@ fn run_all(
     }
     let Some(reference) = reference else {
         scores.extend([None, None]);
-        return scores;
+        return (scores, default_output);
     };
     let tmp = tempfile::tempdir().expect("a temporary folder");
     let input = tmp.path().join("damaged.stl");
@@ -245,7 +251,7 @@ fn run_all(
         }
         scores.push(result);
     }
-    scores
+    (scores, default_output)
 }
 
 fn cell(s: &Option<Score>) -> String {
@@ -317,9 +323,94 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
+/// What the acceptance asks of every output of the default method: manifold3d's verdict, outward,
+/// as many components as the truth (one per vessel tree), stitched, and every input triangle with
+/// all its vertices outside D found unchanged (bit for bit) in the output.
+#[derive(Default)]
+struct Checks {
+    cases: usize,
+    manifold_ok: usize,
+    outward: usize,
+    components_ok: usize,
+    stitched: usize,
+    outside_kept: usize,
+}
+
+impl Checks {
+    /// Checks `output` (the default method's repair of `input`) and prints one line for `case`.
+    fn check(
+        &mut self,
+        case: &str,
+        input: &TriMesh,
+        truth: &TriMesh,
+        balls: &[Ball],
+        output: &Repair,
+        reference: Option<&Reference>,
+    ) {
+        let mesh = &output.mesh;
+        let manifold = reference.and_then(|r| {
+            let tmp = tempfile::tempdir().ok()?;
+            let path = tmp.path().join("out.stl");
+            vesselmsr::io::write_mesh(&path, mesh).ok()?;
+            let v = r.run(&[std::ffi::OsStr::new("check"), path.as_os_str()])?;
+            v["manifold_status"].as_str().map(str::to_string)
+        });
+        let outward = signed_volume(mesh) > 0.0;
+        let (components, truth_components) =
+            (connected_components(mesh).0, connected_components(truth).0);
+        let key = |m: &TriMesh, f: &[u32; 3]| -> [[u64; 3]; 3] {
+            let mut k = f.map(|v| m.vertices[v as usize].coords.map(f64::to_bits).into());
+            let first = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
+            k.rotate_left(first);
+            k
+        };
+        let have: HashSet<[[u64; 3]; 3]> = mesh.faces.iter().map(|f| key(mesh, f)).collect();
+        let outside: Vec<&[u32; 3]> = input
+            .faces
+            .iter()
+            .filter(|f| {
+                f.iter()
+                    .all(|&v| !in_region(balls, &input.vertices[v as usize]))
+            })
+            .collect();
+        let kept = outside
+            .iter()
+            .filter(|f| have.contains(&key(input, f)))
+            .count();
+        println!(
+            "    {case} ({}): manifold3d {}, {}, {components} component(s) (truth {truth_components}), {}, {kept}/{} input triangles outside D kept",
+            RepairOptions::default().method,
+            manifold.as_deref().unwrap_or("not run"),
+            if outward { "outward" } else { "INWARD" },
+            if output.stitched { "stitched" } else { "whole re-mesh" },
+            outside.len()
+        );
+        self.cases += 1;
+        self.manifold_ok += usize::from(manifold.as_deref() == Some("NoError"));
+        self.outward += usize::from(outward);
+        self.components_ok += usize::from(components == truth_components);
+        self.stitched += usize::from(output.stitched);
+        self.outside_kept += usize::from(kept == outside.len() && !outside.is_empty());
+    }
+
+    fn print(&self, what: &str) {
+        println!(
+            "  {what}, {} outputs of {}: manifold3d NoError {}, outward {}, components as the truth {}, stitched {}, all triangles outside D kept {}",
+            self.cases,
+            RepairOptions::default().method,
+            self.manifold_ok,
+            self.outward,
+            self.components_ok,
+            self.stitched,
+            self.outside_kept
+        );
+    }
+}
+
 fn phantoms(reference: Option<&Reference>) {
     println!("\n(a) phantoms (seed 1, R = 3, h = R/8); cells: Hausdorff in D (h), volume error in D, components, seconds");
     print_header("phantom");
+    let mut checks = Checks::default();
     for kind in PhantomKind::ALL {
         let p = make_phantom(
             kind,
@@ -329,7 +420,7 @@ fn phantoms(reference: Option<&Reference>) {
             },
         )
         .expect("phantom builds");
-        let scores = run_all(
+        let (scores, output) = run_all(
             kind.as_str(),
             &p.damaged,
             &p.truth,
@@ -347,7 +438,18 @@ fn phantoms(reference: Option<&Reference>) {
             input.hausdorff_h, input.volume_pct
         );
         print_row(kind.as_str(), &scores);
+        if let Some(out) = &output {
+            checks.check(
+                kind.as_str(),
+                &p.damaged,
+                &p.truth,
+                &p.regions,
+                out,
+                reference,
+            );
+        }
     }
+    checks.print("phantoms");
 }
 
 /// The whole vessel, capped when open and made outward, with the vertices of its open ends.
@@ -435,11 +537,11 @@ struct RealCase {
     ball: Ball,
 }
 
-fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
+fn real(dir: &Path, reference: Option<&Reference>) {
     println!("\n(b) real meshes, synthetic chop (ball 1.5R on a wall point, D = ball 1.95R), repaired at the grid's voxel h");
     print_header("case");
     let mut per_method: Vec<Vec<Score>> = vec![Vec::new(); labels().len()];
-    let mut speed_case = None;
+    let mut checks = Checks::default();
     let full = std::env::var_os("VESSELMSR_BENCH_FULL").is_some();
     for name in REAL {
         let path = dir.join(name);
@@ -518,7 +620,7 @@ fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
             let case = format!("{}#{}", name.trim_end_matches(".stl"), n + 1);
             let balls = [region];
             let slow = full;
-            let scores = run_all(
+            let (scores, output) = run_all(
                 &case,
                 &damaged,
                 &truth,
@@ -536,11 +638,8 @@ fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
                     per_method[i].push(s.clone());
                 }
             }
-            if speed_case.is_none() && name == "aorta_abdominal_capped.stl" {
-                speed_case = Some(RealCase {
-                    mesh: closed.clone(),
-                    ball: region,
-                });
+            if let Some(out) = &output {
+                checks.check(&case, &damaged, &truth, &balls, out, reference);
             }
         }
     }
@@ -558,7 +657,21 @@ fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
             scores.len()
         );
     }
-    speed_case
+    checks.print("real cases");
+}
+
+/// The case of (c): the capped aorta and the region around its first wall point of (b).
+fn speed_case(dir: &Path) -> Option<RealCase> {
+    let mesh = vesselmsr::io::read_mesh(&dir.join("aorta_abdominal_capped.stl")).ok()?;
+    let (closed, ends) = prepare(&mesh)?;
+    let &(p, r) = wall_points(&closed, &ends, 1).first()?;
+    Some(RealCase {
+        mesh: closed,
+        ball: Ball {
+            center: p,
+            radius: REGION * r,
+        },
+    })
 }
 
 fn speed(case: &RealCase, reference: Option<&Reference>) {
@@ -647,7 +760,7 @@ fn main() {
     );
     println!("reproduce: cargo bench --bench inpaint");
     let reference = Reference::find_or_notice("baselines and reference loop");
-    // `cargo bench --bench inpaint -- real` runs (b) and (c) only, `-- phantoms` (a) only.
+    // `-- phantoms` runs (a) only, `-- real` (b) only, `-- speed` (c) only.
     let only: Vec<String> = std::env::args()
         .skip(1)
         .filter(|a| !a.starts_with("--"))
@@ -657,13 +770,19 @@ fn main() {
         phantoms(reference.as_ref());
     }
     let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"));
-    if !wants("real") {
+    if !(wants("real") || wants("speed")) {
     } else if !dir.is_dir() {
         println!("skipping (b) and (c): ../shared/data/real not found");
-    } else if let Some(case) = real(dir, reference.as_ref()) {
-        speed(&case, reference.as_ref());
     } else {
-        println!("skipping (c): no case on the capped aorta");
+        if wants("real") {
+            real(dir, reference.as_ref());
+        }
+        if wants("speed") {
+            match speed_case(dir) {
+                Some(case) => speed(&case, reference.as_ref()),
+                None => println!("skipping (c): no case on the capped aorta"),
+            }
+        }
     }
     println!(
         "\nbenchmark took {:.1} s; load now {}",

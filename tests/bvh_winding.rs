@@ -392,3 +392,68 @@ fn winding_order_beta_sweep() {
         println!("{line}");
     }
 }
+
+/// On a closed surface the winding number is the signed count of ray crossings
+/// (`MeshBvh::winding_number_by_rays`, what the voxelizer's sign uses on closed meshes): equal
+/// to the rounded exact sum at every sampled point off the surface of the closed real meshes
+/// (outward cortex: 1 inside; inward capped aorta: −1 inside), and at the nodes of a lattice
+/// through each (axis-aligned rows of points, as the voxelizer's seeds are); also on a sphere
+/// (both orientations) and two overlapping spheres (2 in the overlap).
+#[test]
+fn closed_meshes_winding_by_rays_equals_exact() {
+    let mut cases: Vec<(String, TriMesh)> = Vec::new();
+    let sphere = icosphere(3, 1.0, Point3::origin());
+    let mut flipped = sphere.clone();
+    flipped.flip_faces();
+    let mut two = sphere.clone();
+    two.append(&icosphere(3, 1.0, Point3::new(0.7, 0.1, 0.0)));
+    cases.push(("sphere".into(), sphere));
+    cases.push(("inward sphere".into(), flipped));
+    cases.push(("two overlapping spheres".into(), two));
+    if let Some(meshes) = real_meshes() {
+        for (name, mesh) in meshes {
+            if name == "cortex_rh_pial_fsaverage5.stl" || name == "aorta_abdominal_capped.stl" {
+                cases.push((name, mesh));
+            }
+        }
+    }
+    for (name, mesh) in &cases {
+        let diag = bbox_diagonal(mesh);
+        let bvh = MeshBvh::new(mesh);
+        let mut pts = sample_points(mesh, 4_000, 7);
+        let (lo, hi) = vesselmsr::mesh::measures::bounding_box(mesh);
+        let n = 24;
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let t = Vector3::new(i as f64, j as f64, k as f64) / (n - 1) as f64;
+                    pts.push(lo + (hi - lo).component_mul(&t));
+                }
+            }
+        }
+        let dist = bvh.closest_points(&pts);
+        let checked: Vec<(Point3<f64>, f64)> = pts
+            .par_iter()
+            .zip(&dist)
+            .filter(|(_, cp)| cp.distance > 1e-6 * diag)
+            .map(|(p, _)| (*p, winding_number_exact(mesh, p)))
+            .collect();
+        let (mut nonzero, mut two) = (0, 0);
+        for (p, exact) in &checked {
+            let rays = bvh.winding_number_by_rays(p);
+            assert_eq!(
+                rays,
+                Some(exact.round() as i64),
+                "{name} at {p}: exact {exact}"
+            );
+            nonzero += usize::from(exact.round() != 0.0);
+            two += usize::from(exact.round().abs() == 2.0);
+        }
+        println!(
+            "{name}: {} points, {nonzero} with w ≠ 0, {two} with |w| = 2: rays = exact",
+            checked.len()
+        );
+        assert!(nonzero > 100, "{name}: too few inside points");
+        assert_eq!(two > 0, name.starts_with("two"), "{name}");
+    }
+}

@@ -233,6 +233,67 @@ impl MeshBvh {
         })
     }
 
+    /// The winding number at `p` of a closed surface (every edge used as often in each direction,
+    /// as [`crate::mesh::topology`] counts it), as the signed number of crossings of a ray from `p`
+    /// to infinity: +1 where the ray leaves through a face's front (its normal (b − a) × (c − a)
+    /// points along the ray), −1 where it enters. For such a surface this equals the generalized
+    /// winding number off the triangles, exactly: 1 inside an outward surface, −1 inside an
+    /// inward one, 0 outside, more where components overlap. A ray that passes within a hair of
+    /// an edge or vertex (where the watertight test may count a crossing twice), grazes a face,
+    /// or starts on a triangle is not trusted; the next of a few fixed directions is tried.
+    /// `None` when none gives a clean count (`p` on the surface, in practice).
+    /// Meaningless for an open surface (the count then depends on the direction).
+    pub fn winding_number_by_rays(&self, p: &Point3<f64>) -> Option<i64> {
+        // Directions with no simple relation to the axes or to each other.
+        const DIRECTIONS: [[f64; 3]; 6] = [
+            [0.5377, 0.6523, 0.5339],
+            [-0.7183, 0.3167, 0.6196],
+            [0.2113, -0.8409, 0.4982],
+            [-0.4431, -0.5186, -0.7313],
+            [0.8867, -0.1249, -0.4452],
+            [-0.1541, 0.9237, -0.3508],
+        ];
+        // Barycentric coordinates below this count as on an edge; normal·direction below this
+        // (relative to the face's size) as grazing.
+        const HAIR: f64 = 1e-9;
+        if self.is_empty() || !p.iter().all(|c| c.is_finite()) {
+            return None;
+        }
+        let scale = (self.bbox[1] - self.bbox[0]).norm();
+        'directions: for d in DIRECTIONS {
+            let dir = Vector3::from(d);
+            let Some(clip) = self.clip_ray(p, &dir, f64::INFINITY) else {
+                // The ray misses the whole hierarchy: p is outside its box.
+                return Some(0);
+            };
+            let mut count = 0i64;
+            let mut clean = true;
+            self.traverse_ray(&clip, |slot, _| {
+                if !clean {
+                    return;
+                }
+                let [a, b, c] = &self.tris[slot];
+                if let Some((t, bary)) = intersect_ray_triangle(p, &dir, f64::INFINITY, a, b, c) {
+                    let normal = (b - a).cross(&(c - a));
+                    let facing = normal.dot(&dir);
+                    if bary.iter().any(|&w| w < HAIR)
+                        || facing.abs() < HAIR * normal.norm()
+                        || t * dir.norm() < HAIR * scale
+                    {
+                        clean = false;
+                    } else {
+                        count += if facing > 0.0 { 1 } else { -1 };
+                    }
+                }
+            });
+            if !clean {
+                continue 'directions;
+            }
+            return Some(count);
+        }
+        None
+    }
+
     /// Number of triangles the ray `origin + t·dir`, 0 ≤ t ≤ `t_max`, crosses (both sides count).
     /// From a point off a closed, consistently oriented mesh, the parity of this count to
     /// infinity tells inside (odd) from outside (even), unless the ray passes exactly through an

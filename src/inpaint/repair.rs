@@ -8,7 +8,8 @@
 //!    are tolerated), redistanced over the whole sub-box: the fills compare true distances.
 //! 3. Fill D by one of the methods ([`InpaintMethod`]), blend the result into φ_0 over a band
 //!    inside ∂D (no seam), remove pieces that float in D or voids sealed in it (`topology`),
-//!    redistance.
+//!    redistance near the surface (not after the axial fill, whose values are distances
+//!    already).
 //! 4. Mesh: marching cubes of the filled φ; with `keep_outside`, stitch the part deep in D into the
 //!    input's triangles outside D; when that fails (or without `keep_outside`), re-mesh the whole
 //!    vessel with the filled sub-box. Check that the output is closed where the input was.
@@ -417,14 +418,17 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     };
     blend_known(&mut psi, &phi0, &weights);
     remove_islands(&mut psi, &unknown);
-    // Marching cubes needs distances near the surface only.
-    redistance(
-        &mut psi,
-        &RedistanceOptions {
-            band: Some(3.0 * h),
-            ..RedistanceOptions::default()
-        },
-    )?;
+    // Marching cubes needs distances near the surface only. The axial fill interpolates
+    // distances, which are already that; the flows' and msr's fields are redistanced first.
+    if opts.method != InpaintMethod::Axial {
+        redistance(
+            &mut psi,
+            &RedistanceOptions {
+                band: Some(3.0 * h),
+                ..RedistanceOptions::default()
+            },
+        )?;
+    }
     lap("fill", &mut timings);
     let patch = extract_surface(&psi, &ExtractOptions::default())?;
     // Stitched into the kept triangles, or (without keep_outside, or when that fails) the whole

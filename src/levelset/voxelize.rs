@@ -15,7 +15,9 @@
 //!   inward-facing closed mesh (w = −1 inside) gives the same φ as the outward one. This is the
 //!   rule of libigl's `signed_distance` with the fast winding number sign. w is evaluated at few
 //!   nodes and carried along grid edges that provably cross no triangle (see
-//!   `voxelize/sign.rs`), so the sign is known at every node, in and out of the band.
+//!   `voxelize/sign.rs`), so the sign is known at every node, in and out of the band. On a
+//!   closed surface (every edge used as often in each direction) w is an integer, the signed
+//!   count of a ray's crossings, and is evaluated that way (exact; no hierarchy of expansions).
 //!
 //! Work is parallel (rayon) over z-layers of the grid, except the sign flood, which is a plain
 //! breadth-first traversal. Memory: the f32 grid and one byte of state per node, plus the
@@ -29,7 +31,7 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::time::Instant;
 
-use crate::bvh::{WindingNumber, WindingOptions};
+use crate::bvh::{MeshBvh, WindingNumber, WindingOptions};
 use crate::grid::{Grid3, GridTransform};
 use crate::{Error, Result, TriMesh};
 
@@ -237,27 +239,35 @@ pub fn voxelize_with_report(
     };
 
     let t = Instant::now();
-    let wn = WindingNumber::new(mesh, opts.winding);
-    if wn.bvh().is_empty() {
+    report.closed = is_closed(mesh);
+    let bvh = MeshBvh::new(mesh);
+    if bvh.is_empty() {
         return Err(Error::InvalidMesh(
             "cannot voxelize a mesh without triangles (none with valid vertices)".into(),
         ));
     }
+    // A closed surface's winding number is its signed count of ray crossings: no expansions to
+    // build. An open one needs the fast winding number's hierarchy.
+    let source = if report.closed {
+        sign::SignSource::Rays { bvh, mesh }
+    } else {
+        sign::SignSource::Winding(WindingNumber::from_bvh(bvh, opts.winding))
+    };
+    let bvh = source.bvh();
     report.seconds_hierarchy = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let bw = opts.band * h;
     let mut state = vec![0u8; n];
-    report.band_nodes = band::band_distances(wn.bvh(), &layout, bw, grid.data_mut(), &mut state);
+    report.band_nodes = band::band_distances(bvh, &layout, bw, grid.data_mut(), &mut state);
     report.seconds_band = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    report.closed = is_closed(mesh);
     // On a closed surface w is an integer off the triangles, so the flood alone is exact; on an
     // open one, every node within one voxel of a triangle is evaluated too (see `sign`).
     let near = if report.closed { 0.0 } else { h };
     let counts = sign::assign_signs(
-        &wn,
+        &source,
         &layout,
         grid.data(),
         &mut state,
@@ -277,7 +287,7 @@ pub fn voxelize_with_report(
 
     let t = Instant::now();
     if opts.far == FarFill::Exact {
-        band::far_distances(mesh, wn.bvh(), &layout, grid.data_mut());
+        band::far_distances(mesh, bvh, &layout, grid.data_mut());
     }
     let clamp = bw as f32;
     grid.data_mut()

@@ -1,6 +1,9 @@
 //! Signs at every node from few winding-number evaluations.
 //!
-//! The sign is inside iff |w| ≥ ½ for the generalized winding number w. Where the fast w (β of
+//! The sign is inside iff |w| ≥ ½ for the generalized winding number w. On a closed surface w
+//! is an integer off the triangles, the signed number of crossings of any ray to infinity, which
+//! is what is evaluated there (exact, and no hierarchy of expansions to build). Otherwise the
+//! fast w is evaluated, and where it (β of
 //! the options, default 2: error up to about 1e-2) comes within 0.02 of ±½ — only across open
 //! ends, on the surface |w| = ½ that closes them — it is evaluated again with β = 8 (error about
 //! 2e-5), so the sign there is that of the exact w but for the thinnest of margins. Evaluating w at every
@@ -37,7 +40,29 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::OnceLock;
 
 use super::{Layout, ASSIGNED, EVAL, NEG, QUEUED};
-use crate::bvh::{WindingNumber, WindingOptions};
+use crate::bvh::brute::winding_number_exact;
+use crate::bvh::{MeshBvh, WindingNumber, WindingOptions};
+use crate::TriMesh;
+
+/// How w is evaluated at a node.
+pub(super) enum SignSource<'a> {
+    /// A closed surface (every edge used as often in each direction): w is the signed count of
+    /// ray crossings, exact and cheap (`MeshBvh::winding_number_by_rays`); the exact sum over
+    /// the triangles where no ray gives a clean count (a node on the surface).
+    Rays { bvh: MeshBvh, mesh: &'a TriMesh },
+    /// Any surface: the fast winding number, refined near ±½ (see the module docs).
+    Winding(WindingNumber),
+}
+
+impl SignSource<'_> {
+    /// The triangle hierarchy.
+    pub(super) fn bvh(&self) -> &MeshBvh {
+        match self {
+            SignSource::Rays { bvh, .. } => bvh,
+            SignSource::Winding(wn) => wn.bvh(),
+        }
+    }
+}
 
 /// Counts of winding-number evaluations, for the report.
 #[derive(Debug, Default, Clone, Copy)]
@@ -91,7 +116,7 @@ fn for_neighbours(layout: &Layout, idx: usize, mut f: impl FnMut(usize)) {
 /// ≥ 1 is the coarse-lattice spacing in voxels; every node within `near` (world units) of the
 /// mesh is a seed too.
 pub(super) fn assign_signs(
-    wn: &WindingNumber,
+    source: &SignSource,
     layout: &Layout,
     dist: &[f32],
     state: &mut [u8],
@@ -108,6 +133,15 @@ pub(super) fn assign_signs(
     let inside = |idx: usize| -> bool {
         let [i, j, k] = layout.coords(idx);
         let p = layout.world(i, j, k);
+        let wn = match source {
+            SignSource::Rays { bvh, mesh } => {
+                return match bvh.winding_number_by_rays(&p) {
+                    Some(w) => w != 0,
+                    None => winding_number_exact(mesh, &p).abs() >= 0.5,
+                }
+            }
+            SignSource::Winding(wn) => wn,
+        };
         let w = wn.winding_number(&p).abs();
         if (w - 0.5).abs() >= REFINE_MARGIN || wn.options().beta >= REFINE_BETA {
             return w >= 0.5;
