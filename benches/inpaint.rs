@@ -26,7 +26,7 @@
 //!    run only when $VESSELMSR_BENCH_FULL is set, to keep the bench within minutes.
 //! c) Speed: one region of (b) on the capped aorta at the default voxel: our `repair` (axial)
 //!    against reference/inpaint.py (φ_0 by libigl signed distance, axis, vectorised axial fill,
-//!    blend; it stops at the filled φ), one run each; the ratio compares like with like: the
+//!    blend; it stops at the filled φ), the fastest of 3 runs each; the ratio compares like with like: the
 //!    reference's seconds against our "voxelize" + "fill" phases (which also redistance).
 //!
 //! Measured 2026-12-02 (2 cores shared, load 1.4–2.4), after the chord axis, the junction fill
@@ -382,7 +382,11 @@ impl Checks {
             RepairOptions::default().method,
             manifold.as_deref().unwrap_or("not run"),
             if outward { "outward" } else { "INWARD" },
-            if output.stitched { "stitched" } else { "whole re-mesh" },
+            match (&output.stitched, &output.fallback) {
+                (true, _) => "stitched".to_string(),
+                (false, Some(why)) => format!("whole re-mesh ({why})"),
+                (false, None) => "whole re-mesh".to_string(),
+            },
             outside.len()
         );
         self.cases += 1;
@@ -532,6 +536,9 @@ fn chopped(phi: &Grid3, ball: &Ball) -> Option<TriMesh> {
     extract_surface(&g, &ExtractOptions::default()).ok()
 }
 
+/// Runs of each side in (c); the fastest counts.
+const RUNS: usize = 3;
+
 struct RealCase {
     mesh: TriMesh,
     ball: Ball,
@@ -680,23 +687,31 @@ fn speed(case: &RealCase, reference: Option<&Reference>) {
         case.ball.center.coords.as_slice(),
         case.ball.radius
     );
-    let start = Instant::now();
-    let ours = match repair(&case.mesh, &[case.ball], &RepairOptions::default()) {
-        Ok(r) => r,
-        Err(e) => {
-            println!("  ours failed: {e}");
-            return;
-        }
-    };
-    let total = start.elapsed().as_secs_f64();
-    let phase = |n: &str| {
-        ours.timings
+    // The fastest of RUNS runs on each side (the machine is shared).
+    let mut best: Option<(f64, f64, Repair)> = None;
+    for _ in 0..RUNS {
+        let start = Instant::now();
+        let ours = match repair(&case.mesh, &[case.ball], &RepairOptions::default()) {
+            Ok(r) => r,
+            Err(e) => {
+                println!("  ours failed: {e}");
+                return;
+            }
+        };
+        let total = start.elapsed().as_secs_f64();
+        let like: f64 = ours
+            .timings
             .iter()
-            .filter(|(k, _)| k == n)
+            .filter(|(k, _)| k == "voxelize" || k == "fill")
             .map(|(_, s)| s)
-            .sum::<f64>()
+            .sum();
+        if best.as_ref().is_none_or(|(b, _, _)| like < *b) {
+            best = Some((like, total, ours));
+        }
+    }
+    let Some((ours_like, total, ours)) = best else {
+        return;
     };
-    let ours_like = phase("voxelize") + phase("fill");
     println!(
         "  ours: repair {total:.3} s in all (goal < 10 s): {}; sub-box {:?}, h = {:.4}, stitched {}",
         ours.timings
@@ -718,7 +733,7 @@ fn speed(case: &RealCase, reference: Option<&Reference>) {
     let region = format!("{},{},{},{}", c.x, c.y, c.z, case.ball.radius);
     let args: [OsString; 3] = [input.into(), "--region".into(), region.into()];
     let refs: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_os_str()).collect();
-    let Some(theirs) = reference.with_script("inpaint.py").run(&refs) else {
+    let Some(theirs) = reference.with_script("inpaint.py").best_of(RUNS, &refs) else {
         println!("  reference failed");
         return;
     };
