@@ -474,8 +474,31 @@ fn prepare(mesh: &TriMesh) -> Option<(TriMesh, Vec<Point3<f64>>)> {
     Some((closed, ends))
 }
 
-/// `POINTS` deterministic wall points with their local radius (see the module docs).
+/// `POINTS` deterministic wall points with their local radius (see the module docs). A mesh with
+/// open ends that gives fewer under the rule of the bounding box's long ends (meant for capped
+/// ends, which `ends` does not list) is drawn again with its open ends alone kept away from.
 fn wall_points(mesh: &TriMesh, ends: &[Point3<f64>], seed: u64) -> Vec<(Point3<f64>, f64)> {
+    let found = draw_wall_points(mesh, ends, seed, true);
+    if found.len() < POINTS && !ends.is_empty() {
+        let again = draw_wall_points(mesh, ends, seed, false);
+        if again.len() > found.len() {
+            println!(
+                "  ({} wall points away from the bounding box's long ends; {} away from the open ends only)",
+                found.len(),
+                again.len()
+            );
+            return again;
+        }
+    }
+    found
+}
+
+fn draw_wall_points(
+    mesh: &TriMesh,
+    ends: &[Point3<f64>],
+    seed: u64,
+    long_ends: bool,
+) -> Vec<(Point3<f64>, f64)> {
     let bvh = MeshBvh::new(mesh);
     let areas: Vec<f64> = (0..mesh.num_faces())
         .map(|f| 0.5 * mesh.face_normal_raw(f).norm())
@@ -507,7 +530,8 @@ fn wall_points(mesh: &TriMesh, ends: &[Point3<f64>], seed: u64) -> Vec<(Point3<f
             continue;
         };
         let near_end = ends.iter().any(|e| (e - p).norm() < 3.0 * r);
-        let near_long_end = p[long] - lo[long] < 3.0 * r || hi[long] - p[long] < 3.0 * r;
+        let near_long_end =
+            long_ends && (p[long] - lo[long] < 3.0 * r || hi[long] - p[long] < 3.0 * r);
         let near_other = found
             .iter()
             .any(|(q, rq): &(Point3<f64>, f64)| (q - p).norm() < 2.0 * (r + rq));
