@@ -21,7 +21,9 @@
 //!    voxel, smallest R / 8) (the default alone made `msr` take 70 s a case on the aorta); damaged = marching cubes of max(φ_mesh, −φ_ball) with the ball
 //!    of radius 1.5R on the point, truth = marching cubes of φ_mesh on the same grid; D = the ball
 //!    of radius 1.5R·1.3 on the point. Repaired at the grid's voxel by each method and the
-//!    close-holes baseline; per case and the median per method. `flow` and `paper` (20 and up
+//!    close-holes baseline; per case and the median per method, and how many of our repairs
+//!    were stitched into the kept triangles (a line names each case that fell back to the whole
+//!    re-mesh, with the reason). `flow` and `paper` (20 and up
 //!    to 12 level-set motions on a sub-box of about 10⁶ nodes: a minute or more a case)
 //!    run only when $VESSELMSR_BENCH_FULL is set, to keep the bench within minutes.
 //! c) Speed: one region of (b) on the capped aorta at the default voxel: our `repair` (axial)
@@ -112,6 +114,8 @@ struct Score {
     volume_pct: f64,
     components: usize,
     seconds: f64,
+    /// Ours: whether the patch was stitched into the kept triangles (None: a baseline).
+    stitched: Option<bool>,
 }
 
 fn in_region(balls: &[Ball], p: &Point3<f64>) -> bool {
@@ -152,6 +156,7 @@ fn score(output: &TriMesh, truth: &TriMesh, balls: &[Ball], h: f64, seconds: f64
         volume_pct: 100.0 * (v_out - v_truth) / v_truth,
         components: connected_components(output).0,
         seconds,
+        stitched: None,
     }
 }
 
@@ -205,7 +210,13 @@ fn run_all(
         match repair(damaged, balls, &opts) {
             Ok(r) => {
                 let s = start.elapsed().as_secs_f64();
-                scores.push(Some(score(&r.mesh, truth, balls, h, s)));
+                if let Some(why) = &r.fallback {
+                    println!("  {case} {method}: not stitched (whole re-mesh): {why}");
+                }
+                scores.push(Some(Score {
+                    stitched: Some(r.stitched),
+                    ..score(&r.mesh, truth, balls, h, s)
+                }));
             }
             Err(e) => {
                 println!("  {case} {method}: failed: {e}");
@@ -558,6 +569,21 @@ fn real(dir: &Path, reference: Option<&Reference>) -> Option<RealCase> {
             scores.len()
         );
     }
+    let stitched: Vec<String> = labels()
+        .iter()
+        .zip(&per_method)
+        .filter_map(|(label, scores)| {
+            let ours: Vec<bool> = scores.iter().filter_map(|s| s.stitched).collect();
+            (!ours.is_empty()).then(|| {
+                let n = ours.iter().filter(|&&s| s).count();
+                format!("{label} {n} of {}", ours.len())
+            })
+        })
+        .collect();
+    println!(
+        "stitched into the kept triangles (else the whole vessel re-meshed): {}",
+        stitched.join(", ")
+    );
     speed_case
 }
 
