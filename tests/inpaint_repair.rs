@@ -118,12 +118,8 @@ fn phantoms_are_restored_within_the_acceptance_bounds() {
         assert!(mesh_info(&r.mesh).watertight);
         assert_eq!(connected_components(&r.mesh).0, 1);
         assert_manifold3d(&r.mesh);
-        // At the bifurcation the patch's cross-sections near ∂D do not pair up with the holes
-        // yet: the whole vessel is re-meshed there (reported as the fallback).
-        if kind != PhantomKind::Bifurcation {
-            assert!(r.stitched, "{}: {:?}", kind.as_str(), r.fallback);
-            assert_outside_kept(&ph.damaged, &r.mesh, &ph.regions);
-        }
+        assert!(r.stitched, "{}: {:?}", kind.as_str(), r.fallback);
+        assert_outside_kept(&ph.damaged, &r.mesh, &ph.regions);
     }
 }
 

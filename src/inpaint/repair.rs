@@ -182,8 +182,10 @@ pub struct Repair {
 /// Sub-box margin around D beyond the balls, in voxels (the fills that grow the shape add half
 /// the largest radius and their growth c·T).
 const MARGIN_VOXELS: f64 = 6.0;
-/// The depths, in voxels inside ∂D, at which the patch is cut to be stitched (tried in turn).
-const STITCH_MARGINS_VOXELS: [f64; 5] = [1.5, 1.0, 0.75, 2.5, 3.5];
+/// The depths, in voxels inside ∂D, at which the patch is cut to be stitched (tried in turn): a
+/// voxel or more leaves room for the zipper; the shallow ones, last, follow ∂D where the surface
+/// grazes it and a deeper cut would merge the patch's loops (see `stitch`).
+const STITCH_MARGINS_VOXELS: [f64; 8] = [1.5, 1.0, 0.75, 2.5, 3.5, 0.5, 0.25, 0.0];
 
 /// Repairs `mesh` inside the union of `balls` (see the module docs).
 pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Repair> {

@@ -4,6 +4,12 @@
 //! joined to the patch boundary loop facing it by a strip of triangles (a zipper that advances
 //! along whichever loop gives the shorter new edge). The result is checked (closed where the input
 //! was, manifold, consistently oriented); the caller falls back to the full re-mesh otherwise.
+//!
+//! The holes lie at ∂D, the patch loops at the margin: they pair up one to one only when the
+//! surface between the two depths holds no saddle of the depth in D. Where the surface grazes ∂D
+//! (the outer walls of a bifurcation whose D is centred on the carina pass 0.6 voxel inside ∂D)
+//! the depth on it has a saddle just inside ∂D, and any deeper cut joins the cross-sections on
+//! either side of it into one loop; so the margins tried end with shallow ones, down to ∂D itself.
 
 use super::region::{depth_in, Ball};
 use crate::mesh::topology::{boundary_loops, EdgeMap};
@@ -11,20 +17,23 @@ use crate::{Error, Result, TriMesh};
 use nalgebra::Point3;
 use std::collections::{HashMap, HashSet};
 
-/// The part of `mesh` made of the faces `keep` selects, its vertices renumbered compactly.
-fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> TriMesh {
+/// The part of `mesh` made of the faces `keep` selects, its vertices renumbered compactly, and
+/// for each of its vertices the index it has in `mesh`.
+fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> (TriMesh, Vec<u32>) {
     let mut map: HashMap<u32, u32> = HashMap::new();
     let mut out = TriMesh::default();
+    let mut source = Vec::new();
     for f in mesh.faces.iter().filter(|f| keep(f)) {
         let g = f.map(|v| {
             *map.entry(v).or_insert_with(|| {
                 out.vertices.push(mesh.vertices[v as usize]);
+                source.push(v);
                 (out.vertices.len() - 1) as u32
             })
         });
         out.faces.push(g);
     }
-    out
+    (out, source)
 }
 
 /// The boundary loops of `mesh` that `keep` selects, each turned so that consecutive vertices
@@ -49,8 +58,9 @@ fn directed_loops(mesh: &TriMesh, keep: impl Fn(&[u32]) -> bool) -> Vec<Vec<u32>
 }
 
 /// The input with D cut out: its triangles with every vertex outside D (vertices renumbered), and
-/// the holes that removal left (its boundary loops with a vertex within two mean edges of D), each
-/// directed along its faces. Shared by the stitch and by the branch crossings of `axis`.
+/// the holes that removal left: its boundary loops with an edge that was inside the input's
+/// surface (not one of its open edges), each directed along its faces. Shared by the stitch and by
+/// the branch crossings of `axis`.
 pub struct CutOut {
     /// The kept triangles.
     pub kept: TriMesh,
@@ -67,16 +77,24 @@ pub fn cut_out(mesh: &TriMesh, balls: &[Ball]) -> CutOut {
         .iter()
         .map(|p| depth_in(balls, p) > 0.0)
         .collect();
-    let kept = submesh(mesh, |f| f.iter().all(|&v| !inside[v as usize]));
-    let reach = 2.0 * crate::mesh::measures::mean_edge_length(mesh);
+    let (kept, source) = submesh(mesh, |f| f.iter().all(|&v| !inside[v as usize]));
+    let edges = EdgeMap::new(mesh);
+    let open: HashSet<[u32; 2]> = (0..edges.num_edges())
+        .filter(|&e| edges.valence(e) == 1)
+        .map(|e| edges.edges()[e])
+        .collect();
+    // A loop made only of the input's open edges is an open vessel end, not a hole of D.
+    let was_open = |a: u32, b: u32| {
+        let (a, b) = (source[a as usize], source[b as usize]);
+        open.contains(&[a.min(b), a.max(b)])
+    };
     let holes = directed_loops(&kept, |lp| {
-        lp.iter()
-            .any(|&v| depth_in(balls, &kept.vertices[v as usize]) > -reach)
+        (0..lp.len()).any(|i| !was_open(lp[i], lp[(i + 1) % lp.len()]))
     });
     CutOut {
         kept,
         holes,
-        open_edges: EdgeMap::new(mesh).boundary_edges(),
+        open_edges: open.len(),
     }
 }
 
@@ -152,7 +170,7 @@ pub fn stitch_patch(
 /// [`stitch_patch`] with the patch cut at one depth.
 fn stitch_at(cut: &CutOut, patch: &TriMesh, balls: &[Ball], margin: f64) -> Result<TriMesh> {
     let (kept, holes) = (&cut.kept, &cut.holes);
-    let part = submesh(patch, |f| {
+    let (part, _) = submesh(patch, |f| {
         f.iter()
             .all(|&v| depth_in(balls, &patch.vertices[v as usize]) > margin)
     });
