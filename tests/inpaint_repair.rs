@@ -335,6 +335,11 @@ fn cli_bad_input_exits_2_without_output() {
             "region 1",
         ),
         (
+            // Inside the bounding box, in its empty corner.
+            vec!["repair", &aorta, "-o", &o, "--region", "206.7,102,13.5,0.5"],
+            "touches no surface",
+        ),
+        (
             vec!["repair", &aorta, "-o", &o, "--region", "0,0,0,0"],
             "radius",
         ),

@@ -22,7 +22,7 @@ use super::msr_fill::{fill_msr, transfer_details, MsrFillOptions};
 use super::region::{deepest_ball, Ball};
 use super::stitch::{cut_out, stitch_patch};
 use super::topology::remove_islands;
-use crate::grid::{spec::default_voxel, Grid3, GridTransform};
+use crate::grid::{spec::default_voxel, Grid3, GridTransform, SubBox};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::redistance::{redistance, RedistanceOptions};
 use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
@@ -182,6 +182,9 @@ pub struct Repair {
 /// Sub-box margin around D beyond the balls, in voxels (the fills that grow the shape add half
 /// the largest radius and their growth c·T).
 const MARGIN_VOXELS: f64 = 6.0;
+/// Margin around the regions' box within which φ_0 is redistanced for the axial fill (voxels):
+/// its lines leave D within √3 voxels of ∂D, and the blend reaches 2 voxels into D.
+const AXIAL_CORE_VOXELS: f64 = 3.0;
 /// The depths, in voxels inside ∂D, at which the patch is cut to be stitched (tried in turn): a
 /// voxel or more leaves room for the zipper; the shallow ones, last, follow ∂D where the surface
 /// grazes it and a deeper cut would merge the patch's loops (see `stitch`).
@@ -279,8 +282,19 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         .map(|_| ())
     };
     let mut phi0 = voxelize(&closed_input, dims, transform, &VoxelizeOptions::default())?;
-    // True distances away from the surface too: the fills compare and interpolate them.
-    redistance_full(&mut phi0)?;
+    // True distances away from the surface too: the fills compare and interpolate them. The
+    // axial fill reads φ_0 only within a few voxels of ∂D (where its lines leave D, and over the
+    // blend band); beyond, the voxelizer's band is all marching cubes needs. The flows evolve
+    // the whole sub-box.
+    match opts.method {
+        InpaintMethod::Axial => {
+            let core = core_box(&phi0, balls, AXIAL_CORE_VOXELS * h);
+            let mut inner = phi0.extract(&core)?;
+            redistance_full(&mut inner)?;
+            phi0.write_back(&core, &inner)?;
+        }
+        _ => redistance_full(&mut phi0)?,
+    }
     lap("voxelize", &mut timings);
     let depth = region_depth(&phi0, balls);
     let cut = cut_out(&closed_input, balls);
@@ -515,4 +529,22 @@ fn remesh_whole(
         }
     }
     extract_surface(&phi, &ExtractOptions::default())
+}
+
+/// The nodes of `grid` within `margin` (world units) of the bounding box of `balls`.
+fn core_box(grid: &Grid3, balls: &[Ball], margin: f64) -> SubBox {
+    let dims = grid.dims();
+    let origin = grid.world(0, 0, 0);
+    let h = grid.voxel();
+    let mut min = dims;
+    let mut max = [0usize; 3];
+    for b in balls {
+        for a in 0..3 {
+            let lo = ((b.center[a] - b.radius - margin - origin[a]) / h).floor();
+            let hi = ((b.center[a] + b.radius + margin - origin[a]) / h).ceil() + 1.0;
+            min[a] = min[a].min(lo.clamp(0.0, dims[a] as f64) as usize);
+            max[a] = max[a].max(hi.clamp(0.0, dims[a] as f64) as usize);
+        }
+    }
+    SubBox::new(min, max)
 }
