@@ -19,8 +19,8 @@ The same loop as `repair`, up to the filled φ (no marching cubes: skimage is no
    each ball holding the point, repeated); φ_0 there by trilinear interpolation (`scipy.ndimage.map_coordinates`, order 1),
    ψ(x) = (t₋ φ_0(x + t₊a) + t₊ φ_0(x − t₋a)) / (t₊ + t₋); one end alone when the other leaves
    the grid, φ_0 kept when both do. Vectorised over the nodes of D.
-5. the blend ψ ← w ψ + (1 − w) φ_0 with the cubic smoothstep w of the depth over 2h inside ∂D
-   (`src/inpaint/mask.rs`). (`repair` then redistances; this reference does not.)
+5. the union with the input, ψ ← min(ψ, φ_0), then the blend ψ ← w ψ + (1 − w) φ_0 with the
+   cubic smoothstep w of the depth over 2h inside ∂D (`src/inpaint/mask.rs`).
 
 Measured: the volume of {φ < 0} inside D (the union of the balls), of φ_0 and of the filled φ,
 by trilinear φ at the points of a lattice 3× finer than the grid that lie in D (each point
@@ -216,7 +216,7 @@ def inpaint(V, F, balls, voxel=None):
     t2 = time.perf_counter()
     psi, depth, in_d = fill_axial(phi0, origin, h, balls, axes)
     t3 = time.perf_counter()
-    psi = blend(psi, phi0, depth, 2.0 * h)
+    psi = blend(np.minimum(psi, phi0), phi0, depth, 2.0 * h)
     t4 = time.perf_counter()
     res = {
         "seconds": t4 - t0,

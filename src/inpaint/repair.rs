@@ -5,9 +5,12 @@
 //!    default rule on the whole mesh, or given), and take a sub-box around D with a margin:
 //!    the cost follows the size of D, not of the vessel tree.
 //! 2. φ_0: signed distance of the (closed) input on the sub-box (winding-number sign, so holes
-//!    are tolerated), redistanced over the whole sub-box: the fills compare true distances.
-//! 3. Fill D by one of the methods ([`InpaintMethod`]), blend the result into φ_0 over a band
-//!    inside ∂D (no seam), remove pieces that float in D or voids sealed in it (`topology`),
+//!    are tolerated), redistanced so that the fills compare true distances: over the whole
+//!    sub-box for the flows, within 3 voxels of the regions' box for the axial fill (which reads
+//!    φ_0 only near ∂D).
+//! 3. Fill D by one of the methods ([`InpaintMethod`]), unite it with the input (min(ψ, φ_0):
+//!    the damage is missing volume, so nothing the input has is taken away), blend the result
+//!    into φ_0 over a band inside ∂D (no seam), remove pieces that float in D or voids sealed in it (`topology`),
 //!    redistance near the surface (not after the axial fill, whose values are distances
 //!    already).
 //! 4. Mesh: marching cubes of the filled φ; with `keep_outside`, stitch the part deep in D into the
@@ -33,6 +36,7 @@ use crate::motion::diffusion::diffuse;
 use crate::motion::{Flow, FlowOptions, Velocity};
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;
 use std::time::Instant;
@@ -432,6 +436,12 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
             psi
         }
     };
+    // The fill is united with the input: the damage a repair is for (a chopped wall, a
+    // narrowing, an occlusion) is missing volume, so what the input has in D is kept.
+    psi.data_mut()
+        .par_iter_mut()
+        .zip(phi0.data().par_iter())
+        .for_each(|(v, &k)| *v = v.min(k));
     blend_known(&mut psi, &phi0, &weights);
     remove_islands(&mut psi, &unknown);
     // Marching cubes needs distances near the surface only. The axial fill interpolates
