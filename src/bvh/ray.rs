@@ -233,9 +233,8 @@ impl MeshBvh {
         })
     }
 
-    /// The winding number at `p` of a closed surface (every edge used as often in each direction,
-    /// as [`crate::mesh::topology`] counts it), as the signed number of crossings of a ray from `p`
-    /// to infinity: +1 where the ray leaves through a face's front (its normal (b − a) × (c − a)
+    /// The winding number at `p` of a closed surface (every edge used as often in each
+    /// direction), as the signed number of crossings of a ray from `p` to infinity: +1 where the ray leaves through a face's front (its normal (b − a) × (c − a)
     /// points along the ray), −1 where it enters. For such a surface this equals the generalized
     /// winding number off the triangles, exactly: 1 inside an outward surface, −1 inside an
     /// inward one, 0 outside, more where components overlap. A ray that passes within a hair of

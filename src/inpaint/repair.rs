@@ -10,9 +10,9 @@
 //!    φ_0 only near ∂D).
 //! 3. Fill D by one of the methods ([`InpaintMethod`]), unite it with the input (min(ψ, φ_0):
 //!    the damage is missing volume, so nothing the input has is taken away), blend the result
-//!    into φ_0 over a band inside ∂D (no seam), remove pieces that float in D or voids sealed in it (`topology`),
-//!    redistance near the surface (not after the axial fill, whose values are distances
-//!    already).
+//!    into φ_0 over a band inside ∂D (no seam), remove pieces that float in D or voids sealed in
+//!    it (`topology`), redistance near the surface (not after the axial fill, whose values are
+//!    distances already).
 //! 4. Mesh: marching cubes of the filled φ; with `keep_outside`, stitch the part deep in D into the
 //!    input's triangles outside D; when that fails (or without `keep_outside`), re-mesh the whole
 //!    vessel with the filled sub-box. Check that the output is closed where the input was.
