@@ -32,24 +32,27 @@
 //!    rounds' ratios, both sides of a round under the same load); the ratio compares like with like: the
 //!    reference's seconds against our "voxelize" + "fill" phases (which also redistance).
 //!
-//! Measured 2026-12-02 (2 cores shared, load 1.4–2.4), after the chord axis, the junction fill
-//! and the band redistance:
+//! Measured 2026-12-02 (2 cores shared, load 1.3–1.8), with the fill united with the input and
+//! the stitch's shallow cuts:
 //! (a) Hausdorff in D (h) / volume error in D, axial | flow | msr | paper | close-holes | Poisson:
-//! tube 0.23/−0.55% | 1.17/+16.8% | 3.49/−16.5% | 5.19/−27.5% | 9.43/−24.8% | 9.38/−24.7%;
-//! curved 4.61/−5.0% | 7.88/−26.2% | 4.15/−23.3% | 7.09/−37.4% | 7.95/−34.0% | 7.94/−33.8%;
-//! bifurcation 1.29/−2.9% | 8.90/+48.7% | 5.78/+17.8% | 4.45/−0.4% | 6.31/−12.3% | 6.30/−12.2%;
-//! stenosis 0.14/−2.0% | 2.41/+29.7% | 3.98/−36.9% | 3.97/−35.1% | 4.03/−35.0% | 4.03/−34.9%;
-//! occlusion 0.04/−0.3% | 0.92/+16.3% | 1.14/−10.9% | 2.97/−24.9% | 7.97/−24.6% | 7.97/−24.5%.
-//! Best: axial on four; on the curved tube msr by Hausdorff (axial close behind, and −5% in
-//! volume against −23%). axial takes 0.1–0.5 s, msr 0.6–2.5 s, flow and paper 2–13 s.
-//! (b) 13 cases (the aneurysm mesh gave 1 point away from its ends): medians axial 1.89 h /
-//! 4.4% (best on 12 of 13), msr 6.29 h / 36.7%, close-holes (= the damaged input) 11.9 h / 55%.
-//! Stitched (the stitch tries cuts down to ∂D, remeasured the same day): axial and msr 13 of 13
-//! (12 of 13 before: aorta_abdominal_open_ends#3 fell back to the whole re-mesh, same figures),
-//! and every repair of (a) (the bifurcation's axial 1.29 h / −2.96% stitched as re-meshed).
-//! (c) sub-box 82³ at h = 0.328 (both sides): ours 0.29 s in all (voxelize 0.18 s, fill 0.09 s),
-//! the reference 2.0 s (libigl signed distance 1.75 s, fill 0.23 s): 7.5× (goal 10×, not met);
-//! volume in D of the filled φ 1800.6 (reference) against 1798.6 (our repaired mesh).
+//! tube 0.22/−0.47% | 1.17/+16.8% | 3.49/−11.7% | 5.19/−16.9% | 9.43/−24.8% | 9.38/−24.7%;
+//! curved 4.61/+7.5% | 7.88/−21.1% | 4.15/−17.0% | 7.09/−26.7% | 7.95/−34.0% | 7.94/−33.8%;
+//! bifurcation 1.35/−1.1% | 8.90/+48.7% | 5.78/+18.1% | 4.45/+5.7% | 6.31/−12.3% | 6.30/−12.2%;
+//! stenosis 0.14/−2.0% | 2.41/+29.7% | 3.98/−35.0% | 3.97/−34.7% | 4.03/−35.0% | 4.03/−34.9%;
+//! occlusion 0.04/−0.3% | 0.92/+16.3% | 1.14/−6.4% | 2.97/−14.2% | 7.97/−24.6% | 7.97/−24.5%.
+//! Best: axial on four; on the curved tube msr by Hausdorff (axial close behind). axial takes
+//! 0.1–0.2 s, msr 0.9–2.8 s, flow and paper 3–12 s. Every axial output: manifold3d NoError,
+//! outward, one component, stitched, every input triangle outside D kept.
+//! (b) 15 cases (the aneurysm's 3 points away from its open ends only): medians axial 1.91 h /
+//! 3.27% (best on 13 of 15), msr 6.30 h / 31.5% (n = 14: on ica_aneurysm_c0015#1 its flow
+//! reached the sub-box's border), close-holes (= the damaged input) 12.17 h / 54.8%. Worst axial:
+//! ica_aneurysm_c0015#2 (a chop of the aneurysm's sac, not of a tube) 13.69 h / −46.8%.
+//! Every axial output: manifold3d NoError, outward, one component, stitched (msr 14 of 14 too),
+//! every input triangle outside D kept.
+//! (c) sub-box 82³ at h = 0.328 (both sides), 7 rounds: ours 0.19–0.22 s (voxelize 0.15 s, fill
+//! 0.04 s), the reference 2.06 s at best (libigl signed distance 1.84 s, fill 0.21 s); median
+//! ratio 11.6× (rounds 8.4–13.5) in one run and 9.9× (9.5–11.0) in the next, a minute later;
+//! volume in D of the filled φ 1903.0 (reference) against 1902.2 (our repaired mesh).
 //!
 //! Run: `cargo bench --bench inpaint` (`-- phantoms` for (a) only, `-- real` for (b), `-- speed`
 //! for (c);
