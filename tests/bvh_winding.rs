@@ -420,9 +420,9 @@ fn closed_meshes_winding_by_rays_equals_exact() {
     for (name, mesh) in &cases {
         let diag = bbox_diagonal(mesh);
         let bvh = MeshBvh::new(mesh);
-        let mut pts = sample_points(mesh, 4_000, 7);
+        let mut pts = sample_points(mesh, 1_500, 7);
         let (lo, hi) = vesselmsr::mesh::measures::bounding_box(mesh);
-        let n = 24;
+        let n = 14;
         for k in 0..n {
             for j in 0..n {
                 for i in 0..n {
