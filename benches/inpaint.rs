@@ -44,10 +44,11 @@
 //! 0.1–0.2 s, msr 0.9–2.8 s, flow and paper 3–12 s. Every axial output: manifold3d NoError,
 //! outward, one component, stitched, every input triangle outside D kept.
 //! (b) 15 cases (the aneurysm's 3 points away from its open ends only): medians axial 1.91 h /
-//! 3.27% (best on 13 of 15), msr 6.30 h / 31.5% (n = 14: on ica_aneurysm_c0015#1 its flow
-//! reached the sub-box's border), close-holes (= the damaged input) 12.17 h / 54.8%. Worst axial:
+//! 3.27% (best on 13 of 15), msr 6.31 h / 31.6% (its coarse level may now reach the sub-box's
+//! border: on ica_aneurysm_c0015#1 it stopped there before), close-holes (= the damaged input)
+//! 12.17 h / 54.8%. Worst axial:
 //! ica_aneurysm_c0015#2 (a chop of the aneurysm's sac, not of a tube) 13.69 h / −46.8%.
-//! Every axial output: manifold3d NoError, outward, one component, stitched (msr 14 of 14 too),
+//! Every axial output: manifold3d NoError, outward, one component, stitched (msr 15 of 15 too),
 //! every input triangle outside D kept.
 //! (c) sub-box 82³ at h = 0.328 (both sides), 7 rounds: ours 0.19–0.22 s (voxelize 0.15 s, fill
 //! 0.04 s), the reference 2.06 s at best (libigl signed distance 1.84 s, fill 0.21 s); median

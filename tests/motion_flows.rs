@@ -536,6 +536,34 @@ fn a_flow_restricted_to_a_sub_box_changes_only_its_nodes() {
     assert_eq!(rb, rb0, "sphere B, outside the region, moved");
 }
 
+/// A shape growing into the grid's border is an error (the grid needs more padding), unless
+/// `allow_border` says the grid is a sub-box of a larger scene (the inpainting's coarse level).
+#[test]
+fn a_shape_reaching_the_border_is_an_error_unless_allowed() {
+    // A sphere of 6 voxels with 3 voxels of room, expanding by 6 voxels.
+    let (g, _) = sphere(6.0, 3.0);
+    let c = 1.0;
+    let run = |opts: &FlowOptions| {
+        let mut phi = g.clone();
+        evolve(
+            &mut phi,
+            Velocity::Expand { c },
+            6.0 * H / c,
+            H / c,
+            opts,
+            |_| {},
+        )
+    };
+    let err = run(&FlowOptions::default()).unwrap_err().to_string();
+    assert!(err.contains("reached the border"), "{err}");
+    let steps = run(&FlowOptions {
+        allow_border: true,
+        ..FlowOptions::default()
+    })
+    .unwrap();
+    assert_eq!(steps.len(), 6);
+}
+
 #[test]
 fn a_shape_vanishing_before_the_final_time_is_an_error_naming_the_time() {
     let r0 = 6.0;

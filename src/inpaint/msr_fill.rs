@@ -49,7 +49,11 @@ pub fn coarse_level(phi0: &Grid3, opts: &MsrFillOptions) -> Result<Grid3> {
         Velocity::Inpaint { c: opts.speed },
         opts.time,
         dt,
-        &FlowOptions::default(),
+        // The sub-box's border cuts the vessel anyway; outside D, φ_0 is restored.
+        &FlowOptions {
+            allow_border: true,
+            ..FlowOptions::default()
+        },
         |_| {},
     )?;
     redistance(

@@ -402,7 +402,10 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
             let mut flow = Flow::new(
                 Velocity::Inpaint { c: flow_speed },
                 flow_time / steps as f64,
-                FlowOptions::default(),
+                FlowOptions {
+                    allow_border: true,
+                    ..FlowOptions::default()
+                },
             )?;
             let mut psi = phi0.clone();
             iterations = steps;

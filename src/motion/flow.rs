@@ -87,6 +87,11 @@ pub struct FlowOptions {
     /// scheme of Esedoglu, Ruuth and Tsai, first order. The correction holds three more grids
     /// during the step.
     pub second_order: bool,
+    /// Let the shape reach the border of the grid (default false: a shape that did not touch
+    /// the border and reaches it is an error, the grid needing more padding). For a sub-box of a
+    /// larger scene whose shape is restored from known data afterwards (the inpainting's coarse
+    /// level), where the mirror boundary stands in for what lies beyond.
+    pub allow_border: bool,
 }
 
 impl Default for FlowOptions {
@@ -97,6 +102,7 @@ impl Default for FlowOptions {
             region: None,
             volume_tolerance: 1e-9,
             second_order: true,
+            allow_border: false,
         }
     }
 }
@@ -286,7 +292,7 @@ impl Flow {
                 self.time
             )));
         }
-        if !border_before && border_inside(phi) {
+        if !self.opts.allow_border && !border_before && border_inside(phi) {
             return Err(Error::Geometry(format!(
                 "{}: the shape reached the border of the grid at t = {} (world length²): the \
                  grid needs more padding",
