@@ -257,17 +257,9 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     let pad = 4.0 * h + margin + 2.0 * rmax;
     let origin = lo - Vector3::repeat(pad);
     let whole_dims = [0, 1, 2].map(|a| ((hi[a] - lo[a] + 2.0 * pad) / h).ceil() as usize + 1);
-    let mut first = [usize::MAX; 3];
-    let mut last = [0usize; 3];
-    for b in balls {
-        for a in 0..3 {
-            let l = ((b.center[a] - b.radius - margin - origin[a]) / h).floor();
-            let u = ((b.center[a] + b.radius + margin - origin[a]) / h).ceil();
-            first[a] = first[a].min(l.max(0.0) as usize);
-            last[a] = last[a].max((u.max(0.0) as usize).min(whole_dims[a] - 1));
-        }
-    }
-    let dims = [0, 1, 2].map(|a| last[a].saturating_sub(first[a]) + 1);
+    let sub = nodes_around(&origin, h, whole_dims, balls, margin);
+    let first = sub.min;
+    let dims = [0, 1, 2].map(|a| sub.max[a].saturating_sub(sub.min[a]));
     if dims.iter().any(|&n| n < 4) {
         return Err(Error::Geometry(
             "the regions lie outside the mesh's bounding box".into(),
@@ -292,7 +284,7 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     // the whole sub-box.
     match opts.method {
         InpaintMethod::Axial => {
-            let core = core_box(&phi0, balls, AXIAL_CORE_VOXELS * h);
+            let core = nodes_around(&sub_origin, h, dims, balls, AXIAL_CORE_VOXELS * h);
             let mut inner = phi0.extract(&core)?;
             redistance_full(&mut inner)?;
             phi0.write_back(&core, &inner)?;
@@ -544,11 +536,16 @@ fn remesh_whole(
     extract_surface(&phi, &ExtractOptions::default())
 }
 
-/// The nodes of `grid` within `margin` (world units) of the bounding box of `balls`.
-fn core_box(grid: &Grid3, balls: &[Ball], margin: f64) -> SubBox {
-    let dims = grid.dims();
-    let origin = grid.world(0, 0, 0);
-    let h = grid.voxel();
+/// The nodes of the lattice of `dims` nodes from `origin` with spacing `h` that lie within
+/// `margin` (world units) of the bounding box of `balls` (at most one node beyond), clamped to the
+/// lattice.
+fn nodes_around(
+    origin: &Point3<f64>,
+    h: f64,
+    dims: [usize; 3],
+    balls: &[Ball],
+    margin: f64,
+) -> SubBox {
     let mut min = dims;
     let mut max = [0usize; 3];
     for b in balls {

@@ -238,7 +238,9 @@ impl Flow {
             )));
         }
         let band = self.opts.band_width(&self.velocity, dt, h);
-        let border_before = border_inside(phi);
+        // A shape that reaches the border must not have touched it before (scanned only when
+        // that is an error).
+        let watch_border = !self.opts.allow_border && !border_inside(phi);
         let (shift, volume, area) = match self.opts.region {
             None => {
                 let region = phi.whole_box();
@@ -292,7 +294,7 @@ impl Flow {
                 self.time
             )));
         }
-        if !self.opts.allow_border && !border_before && border_inside(phi) {
+        if watch_border && border_inside(phi) {
             return Err(Error::Geometry(format!(
                 "{}: the shape reached the border of the grid at t = {} (world length²): the \
                  grid needs more padding",

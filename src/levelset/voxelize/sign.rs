@@ -43,6 +43,7 @@ use super::{Layout, ASSIGNED, EVAL, NEG, QUEUED};
 use crate::bvh::brute::winding_number_exact;
 use crate::bvh::{MeshBvh, WindingNumber, WindingOptions};
 use crate::TriMesh;
+use nalgebra::Point3;
 
 /// How w is evaluated at a node.
 pub(super) enum SignSource<'a> {
@@ -130,19 +131,8 @@ pub(super) fn assign_signs(
     // A fast winding number within REFINE_MARGIN of ±½ is evaluated again more accurately.
     let precise: OnceLock<WindingNumber> = OnceLock::new();
     let refined = AtomicUsize::new(0);
-    let inside = |idx: usize| -> bool {
-        let [i, j, k] = layout.coords(idx);
-        let p = layout.world(i, j, k);
-        let wn = match source {
-            SignSource::Rays { bvh, mesh } => {
-                return match bvh.winding_number_by_rays(&p) {
-                    Some(w) => w != 0,
-                    None => winding_number_exact(mesh, &p).abs() >= 0.5,
-                }
-            }
-            SignSource::Winding(wn) => wn,
-        };
-        let w = wn.winding_number(&p).abs();
+    let fast_inside = |wn: &WindingNumber, p: &Point3<f64>| -> bool {
+        let w = wn.winding_number(p).abs();
         if (w - 0.5).abs() >= REFINE_MARGIN || wn.options().beta >= REFINE_BETA {
             return w >= 0.5;
         }
@@ -156,7 +146,17 @@ pub(super) fn assign_signs(
                 },
             )
         });
-        precise.winding_number(&p).abs() >= 0.5
+        precise.winding_number(p).abs() >= 0.5
+    };
+    let inside = |idx: usize| -> bool {
+        let [i, j, k] = layout.coords(idx);
+        let p = layout.world(i, j, k);
+        match source {
+            SignSource::Rays { bvh, mesh } => bvh
+                .winding_number_by_rays(&p)
+                .map_or_else(|| winding_number_exact(mesh, &p).abs() >= 0.5, |w| w != 0),
+            SignSource::Winding(wn) => fast_inside(wn, &p),
+        }
     };
     let mut counts = SignCounts::default();
 
