@@ -43,12 +43,13 @@ fn ours(mesh: &vesselmsr::TriMesh, phi0: &vesselmsr::grid::Grid3) -> (Decomposit
     let decomposed = start.elapsed().as_secs_f64();
     let start = Instant::now();
     for i in 1..=LEVELS {
+        let data = d.msr.level_data(i);
         std::hint::black_box(
             rebuild_from_tangent_planes(
                 &d.level_sets[i],
-                &d.msr.samples_at(i - 1),
-                &d.msr.normals[i - 1],
-                &d.msr.details[i - 1],
+                &data.points,
+                &data.normals,
+                &data.details,
                 &AdvectOptions::default(),
             )
             .expect("rebuild runs"),
@@ -104,7 +105,7 @@ fn main() {
     let tmp = tempfile::tempdir().expect("a temporary folder");
     let phi_path = tmp.path().join("phi0.npy");
     vesselmsr::io::write_npy(&phi_path, &phi0).expect("write φ_0");
-    let points = write_points(tmp.path(), &m.samples_at(0)).expect("write X_0");
+    let points = write_points(tmp.path(), &m.input_samples()).expect("write X_0");
     // reference/msr.py PHI.npy POINTS.f64 DT STEPS LEVELS: one JSON line.
     let (dt, steps, levels) = (
         OsString::from(m.params.dt.to_string()),

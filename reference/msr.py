@@ -12,10 +12,14 @@ The algorithm follows Dong, Chien, Shen and Osher (level-set multiscale represen
   x ← x − φ ∇φ/|∇φ|² (step at most `max_step` voxels), with φ and ∇φ interpolated by
   `scipy.ndimage.map_coordinates` (order 3); W_i = X_i − X_{i−1}, w_i = W_i·n_i with
   n_i = ∇φ_i/|∇φ_i| at X_i;
+* the input samples are first snapped onto the zero level set of φ_0 the same way;
 * each φ_{i−1} is then rebuilt from φ_i and (X_{i−1}, n_{i−1}, W_i): near the samples a node
-  takes the Gaussian-weighted (σ = radius/2, relative to the nearest) mean over its 8 nearest samples (`scipy.spatial.cKDTree`) of its
-  signed distance to their tangent planes; elsewhere the side of φ_i (at least `band_margin`
-  voxels from the surface); then distance_transform_edt.
+  takes the Gaussian-weighted (σ = h/4, relative to the nearest) mean over its 8 nearest samples
+  (`scipy.spatial.cKDTree`) of its signed distance to their tangent planes, its magnitude kept
+  within [d_min − `coverage`, d_min] (d_min: the nearest sample's distance); elsewhere the side
+  of φ_i (at least `band_margin` voxels from the surface); then distance_transform_edt.
+  (vesselmsr also adds samples where a level's surface has none within h/2, from its
+  marching-cubes surface; this reference does not, which only makes it cheaper.)
 
 CLI: `python msr.py PHI.npy POINTS.f64 DT STEPS LEVELS` prints one JSON line with "seconds"
 (decompose + rebuilds, no I/O), "decompose_seconds", "rebuild_seconds", "mean_abs_detail"
@@ -110,6 +114,7 @@ def decompose(phi0: np.ndarray, origin, voxel: float, samples: np.ndarray, dt: f
     and the mean |w_i| per level."""
     phi = redistance(phi0, voxel)
     interp = Interpolant(phi, origin, voxel)
+    samples, _ = project(interp, samples)
     phis, xs, normals, details, mean_abs, unconverged = [phi], [samples], [unit_normals(interp, samples)], [], [], []
     x = samples
     for _ in range(levels):
@@ -146,6 +151,8 @@ def rebuild_from_tangent_planes(
     extension_radius: float = 1.5,
     band_margin: float = 3.0,
     k: int = 8,
+    spread: float = 0.25,
+    coverage: float = 0.5,
 ) -> np.ndarray:
     """φ_{i−1} from φ_i = `phi` and the samples of S_{i−1} (see the module doc)."""
     from scipy.spatial import cKDTree
@@ -163,13 +170,17 @@ def rebuild_from_tangent_planes(
     if dist.ndim == 1:
         dist, idx = dist[:, None], idx[:, None]
     # Gaussian weights of σ = radius/2, relative to the nearest sample (as vesselmsr's
-    # weighted_nearest); nodes farther than band + radius from every sample keep φ_i's side.
+    # weighted_nearest), for the reach; σ = spread·h for the planes; nodes farther than
+    # band + radius from every sample keep φ_i's side.
     d2 = dist**2
     wgt = np.exp(-(d2 - d2[:, :1]) / (2.0 * (0.5 * radius) ** 2))
     wsum = np.maximum(wgt.sum(axis=1), 1e-300)
     diff = world[:, None, :] - previous[idx]
     plane = np.einsum("nkc,nkc->nk", normals[idx], diff)
-    value = (wgt * plane).sum(axis=1) / wsum
+    wp = np.exp(-(d2 - d2[:, :1]) / (2.0 * (spread * h) ** 2))
+    value = (wp * plane).sum(axis=1) / np.maximum(wp.sum(axis=1), 1e-300)
+    d_min = dist[:, 0]
+    value = np.copysign(np.clip(np.abs(value), np.maximum(d_min - coverage * h, 0.0), d_min), value)
     d2w = (wgt * d2).sum(axis=1) / wsum
     m = (wgt * moved[idx]).sum(axis=1) / wsum
     use = (d2w <= (near + np.minimum(m, 2 * h)) ** 2) & (d2[:, 0] <= (band + radius) ** 2)

@@ -92,10 +92,14 @@ fn decompose_archive_levels_and_figures_round_trip() {
     assert!(samples >= 6068, "the samples include the 6068 vertices");
     let volume1 = f(&levels[0]["volume"]);
     let mut area = f64::INFINITY;
+    // Samples join where a level's surface has none near: never fewer level by level.
+    let mut count = 6068;
     for (i, l) in levels.iter().enumerate() {
         println!("{l}");
         assert_eq!(l["level"], i + 1);
-        assert_eq!(l["samples"].as_u64(), Some(samples));
+        let c = l["samples"].as_u64().unwrap();
+        assert!(c >= count && c <= samples, "{l}");
+        count = c;
         assert!((f(&l["time"]) - (i + 1) as f64 * 4.0 * h * h).abs() < 1e-9);
         // vpmcf keeps the volume and reduces the area; details are a fraction of a voxel.
         assert!((f(&l["volume"]) / volume1 - 1.0).abs() < 0.01, "{l}");
@@ -358,14 +362,14 @@ fn reconstruct_refuses_bad_archives_and_writes_nothing() {
             write_npz(&path, &refs).unwrap();
             path
         };
-        let v2 = edit("version2", &|n, m| {
+        let v1 = edit("version1", &|n, m| {
             if n == "format_version" {
-                NpyArray::scalar_i64(2)
+                NpyArray::scalar_i64(1)
             } else {
                 m
             }
         });
-        run(&v2, &[], "format version 2");
+        run(&v1, &[], "format version 1");
         let short = edit("short", &|n, m| match (n, m.data) {
             ("details", NpyData::F64(v)) => {
                 let mut shape = m.shape.clone();

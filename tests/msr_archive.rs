@@ -1,7 +1,9 @@
 //! The MSR archive: write → read gives the same representation bit for bit; NumPy's `np.load`
 //! (no pickling) reads every member with the documented shapes and values; archives of another
 //! version, truncated, or with members edited out of shape are refused with an error naming the
-//! file and the member. Also the vertex reconstruction X_k = X_N − Σ_{i>k} W_i.
+//! file and the member. Also the vertex reconstruction X_k = X_N − Σ_{i>k} W_i (the input:
+//! X_0 less the snap) and the samples each level's level-set reconstruction reads (a sample
+//! added at level 1 is not among those of level 0).
 
 mod common;
 use common::*;
@@ -12,16 +14,19 @@ use vesselmsr::io::{read_npz, write_npz, NpyArray, NpyData};
 use vesselmsr::msr::archive::{read_msr, write_msr, FORMAT_VERSION};
 use vesselmsr::msr::{Msr, MsrParams};
 
-/// A representation of 3 levels over a tetrahedron's 4 vertices plus 2 extra samples, with
-/// known samples X_0..X_3.
+/// A representation of 3 levels over a tetrahedron's 4 vertices plus 2 extra samples (snapped
+/// by known offsets) and one sample added at level 1, with known samples X_0..X_3.
 fn sample_msr() -> (Msr, Vec<Vec<Point3<f64>>>) {
     let mut rng = rng(11);
     let mut r = || rng.random::<f64>() * 2.0 - 1.0;
     let levels = 3;
-    let s = 6;
-    let xs: Vec<Vec<Point3<f64>>> = (0..=levels)
+    let s = 7;
+    let mut xs: Vec<Vec<Point3<f64>>> = (0..=levels)
         .map(|_| (0..s).map(|_| Point3::new(r(), r(), r()) * 10.0).collect())
         .collect();
+    // Sample 6 joins at level 1: before it, it stays where it was born.
+    xs[0][6] = xs[1][6];
+    let snap = (0..6).map(|_| Vector3::new(r(), r(), r()) * 0.1).collect();
     let details: Vec<Vec<Vector3<f64>>> = (1..=levels)
         .map(|i| (0..s).map(|k| xs[i][k] - xs[i - 1][k]).collect())
         .collect();
@@ -43,6 +48,8 @@ fn sample_msr() -> (Msr, Vec<Vec<Point3<f64>>>) {
         num_vertices: 4,
         extra_face: vec![1, 3],
         extra_bary: vec![[0.2, 0.3, 0.5], [1.0 / 3.0; 3]],
+        snap,
+        born: vec![0, 0, 0, 0, 0, 0, 1],
         samples: xs[levels].clone(),
         details,
         normal_details,
@@ -80,6 +87,20 @@ fn vertices_reconstruct_every_level() {
         let mesh = msr.mesh_at(k);
         assert_eq!(mesh.num_vertices(), 4);
         assert_eq!(mesh.faces, msr.faces);
+        for (v, p) in mesh.vertices.iter().enumerate() {
+            let want = if k == 0 { x[v] - msr.snap[v] } else { x[v] };
+            assert!((p - want).norm() < 1e-12, "level {k} vertex {v}");
+        }
+    }
+    // Level 1 is rebuilt from the 6 samples of S_0; level 2 from all 7 on S_1.
+    for (i, count) in [(1, 6), (2, 7), (3, 7)] {
+        let data = msr.level_data(i);
+        assert_eq!(data.points.len(), count, "level {i}");
+        assert_eq!(msr.level_normal_details(i).len(), count, "level {i}");
+        let last = count - 1;
+        assert!((data.points[last] - xs[i - 1][last]).norm() < 1e-12);
+        assert_eq!(data.details[last], msr.details[i - 1][last]);
+        assert_eq!(data.normals[last], msr.normals[i - 1][last]);
     }
 }
 
@@ -124,11 +145,14 @@ print(json.dumps(out))
     assert_eq!(v["params"]["levels"], 3);
     assert_eq!(shape("faces"), serde_json::json!([4, 3]));
     assert_eq!(v["faces"]["dtype"], "<u4");
-    assert_eq!(shape("samples"), serde_json::json!([6, 3]));
-    assert_eq!(shape("details"), serde_json::json!([3, 6, 3]));
-    assert_eq!(shape("normal_details"), serde_json::json!([3, 6]));
+    assert_eq!(shape("samples"), serde_json::json!([7, 3]));
+    assert_eq!(shape("details"), serde_json::json!([3, 7, 3]));
+    assert_eq!(shape("normal_details"), serde_json::json!([3, 7]));
     assert_eq!(shape("times"), serde_json::json!([4]));
-    assert_eq!(shape("normals"), serde_json::json!([4, 6, 3]));
+    assert_eq!(shape("normals"), serde_json::json!([4, 7, 3]));
+    assert_eq!(shape("snap"), serde_json::json!([6, 3]));
+    assert_eq!(shape("born"), serde_json::json!([7]));
+    assert_eq!(v["born"]["dtype"], "<i8");
     assert_eq!(shape("extra_face"), serde_json::json!([2]));
     assert_eq!(shape("extra_bary"), serde_json::json!([2, 3]));
     assert_eq!(shape("phi"), serde_json::json!([2, 3, 4]));
@@ -166,15 +190,29 @@ fn damaged_archives_are_refused() {
     };
     let cases: Vec<(std::path::PathBuf, &str)> = vec![
         (
-            edited("format_version", Some(NpyArray::scalar_i64(2))),
-            "version 2",
+            edited("format_version", Some(NpyArray::scalar_i64(1))),
+            "version 1",
         ),
         (
             edited(
                 "details",
-                Some(NpyArray::new(&[2, 6, 3], NpyData::F64(vec![0.0; 36]))),
+                Some(NpyArray::new(&[2, 7, 3], NpyData::F64(vec![0.0; 42]))),
             ),
             "details",
+        ),
+        (
+            edited(
+                "born",
+                Some(NpyArray::new(&[7], NpyData::I64(vec![0, 0, 0, 0, 0, 0, 5]))),
+            ),
+            "sample 6 at level 5",
+        ),
+        (
+            edited(
+                "snap",
+                Some(NpyArray::new(&[3, 3], NpyData::F64(vec![0.0; 9]))),
+            ),
+            "'snap' has 3 rows",
         ),
         (
             edited(

@@ -82,11 +82,18 @@ fn cortex_five_levels_of_vpmcf() {
             let got = extract_surface(g, &ExtractOptions::default()).unwrap();
             surface_distance(&truth, &got, &SurfaceDistanceOptions { samples: 100_000 })
         };
+        let data = m.level_data(i);
+        let arrived: Vec<_> = data
+            .points
+            .iter()
+            .zip(&data.details)
+            .map(|(x, w)| x + w)
+            .collect();
         let advect = dist(
             &advect_back(
                 &d.level_sets[i],
-                &m.samples_at(i),
-                &m.details[i - 1],
+                &arrived,
+                &data.details,
                 &AdvectOptions::default(),
             )
             .unwrap(),
@@ -94,9 +101,9 @@ fn cortex_five_levels_of_vpmcf() {
         let tangent = dist(
             &rebuild_from_tangent_planes(
                 &d.level_sets[i],
-                &m.samples_at(i - 1),
-                &m.normals[i - 1],
-                &m.details[i - 1],
+                &data.points,
+                &data.normals,
+                &data.details,
                 &AdvectOptions::default(),
             )
             .unwrap(),

@@ -309,11 +309,8 @@ fn draw_figures(
     vertex_details: &[&[f64]],
     h: f64,
 ) -> anyhow::Result<(RgbImage, RgbImage)> {
-    let levels: Vec<(String, Vec<f64>)> = msr
-        .normal_details
-        .iter()
-        .enumerate()
-        .map(|(i, w)| (format!("level {}", i + 1), w.clone()))
+    let levels: Vec<(String, Vec<f64>)> = (1..=msr.levels())
+        .map(|i| (format!("level {i}"), msr.level_normal_details(i)))
         .collect();
     let histograms = histogram_grid(
         &levels,

@@ -100,7 +100,7 @@ pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
     let t = Instant::now();
     let mut levels: Vec<LevelJson> = (k + 1..=n)
         .map(|i| {
-            let w = &msr.normal_details[i - 1];
+            let w = &msr.level_normal_details(i);
             let count = w.len().max(1) as f64;
             LevelJson {
                 level: i,
@@ -136,11 +136,12 @@ pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
             let mut surface = None;
             for i in (k + 1..=n).rev() {
                 bar.set_message(format!("level {i} → {}", i - 1));
+                let data = msr.level_data(i);
                 phi = rebuild_from_tangent_planes(
                     &phi,
-                    &msr.samples_at(i - 1),
-                    &msr.normals[i - 1],
-                    &msr.details[i - 1],
+                    &data.points,
+                    &data.normals,
+                    &data.details,
                     &AdvectOptions::default(),
                 )
                 .map_err(|e| anyhow::anyhow!("{}: level {i}: {e}", args.archive.display()))?;
@@ -156,8 +157,8 @@ pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
                 let exact = msr.mesh_at(i - 1);
                 let d = surface_distance(&rebuilt, &exact, &SurfaceDistanceOptions::default());
                 let bvh = MeshBvh::new(&rebuilt);
-                let to_rebuilt: Vec<f64> = msr
-                    .samples_at(i - 1)
+                let to_rebuilt: Vec<f64> = data
+                    .points
                     .par_iter()
                     .map(|p| bvh.closest_point(p).distance)
                     .collect();

@@ -4,7 +4,9 @@
 //! Members (S samples, V of them mesh vertices, F faces, N levels, grid nx×ny×nz):
 //! `format` (text "vesselmsr-msr"), `format_version` (int64, [`FORMAT_VERSION`]), `params`
 //! (text: the [`MsrParams`] as JSON), `faces` (uint32 F×3), `num_vertices` (int64),
-//! `extra_face` (int64 S−V), `extra_bary` (float64 (S−V)×3), `samples` (float64 S×3: X_N),
+//! `extra_face` (int64 I−V), `extra_bary` (float64 (I−V)×3), `snap` (float64 I×3: X_0 less the
+//! input position of each of the I input samples), `born` (int64 S: the level each sample joined
+//! at, 0 for the input's; I ≤ S), `samples` (float64 S×3: X_N),
 //! `details` (float64 N×S×3: W_1..W_N), `normal_details` (float64 N×S: w_1..w_N), `normals`
 //! (float64 (N+1)×S×3: the unit outward normals n_0..n_N of S_i at X_i), `times`
 //! (float64 N+1), `phi` (float32 nz×ny×nx, x fastest: φ_T), `phi_origin` (float64 3) and
@@ -25,7 +27,7 @@ use std::path::Path;
 /// The format name stored in every archive.
 pub const FORMAT_NAME: &str = "vesselmsr-msr";
 /// The archive layout version this build writes and reads.
-pub const FORMAT_VERSION: i64 = 1;
+pub const FORMAT_VERSION: i64 = 2;
 
 /// Writes `msr` to `path` (atomic).
 pub fn write_msr(path: &Path, msr: &Msr) -> Result<()> {
@@ -62,6 +64,20 @@ pub fn write_msr(path: &Path, msr: &Msr) -> Result<()> {
             NpyArray::new(
                 &[msr.extra_bary.len(), 3],
                 NpyData::F64(flat3(&mut msr.extra_bary.iter().copied())),
+            ),
+        ),
+        (
+            "snap",
+            NpyArray::new(
+                &[msr.snap.len(), 3],
+                NpyData::F64(flat3(&mut msr.snap.iter().map(|w| (*w).into()))),
+            ),
+        ),
+        (
+            "born",
+            NpyArray::new(
+                &[s],
+                NpyData::I64(msr.born.iter().map(|&b| b as i64).collect()),
             ),
         ),
         (
@@ -156,7 +172,14 @@ pub fn read_msr(path: &Path) -> Result<Msr> {
             "member 'faces': index {i} ≥ num_vertices {num_vertices}"
         )));
     }
-    let extra = s - num_vertices;
+    let snap = f64_array(take("snap")?, "snap", &[None, Some(3)]).map_err(&bad)?;
+    let inputs = snap.0[0];
+    if !(num_vertices..=s).contains(&inputs) {
+        return Err(bad(format!(
+            "member 'snap' has {inputs} rows, not within {num_vertices}..={s}"
+        )));
+    }
+    let extra = inputs - num_vertices;
     let extra_face = match take("extra_face")? {
         NpyArray {
             shape,
@@ -198,6 +221,22 @@ pub fn read_msr(path: &Path) -> Result<Msr> {
         &[Some(levels + 1), Some(s), Some(3)],
     )
     .map_err(&bad)?;
+    let born = match take("born")? {
+        NpyArray {
+            shape,
+            data: NpyData::I64(v),
+        } if shape == [s] => v,
+        _ => return Err(bad(format!("member 'born' is not an int64 array of {s}"))),
+    };
+    if let Some((k, &b)) = born
+        .iter()
+        .enumerate()
+        .find(|&(k, &b)| !(0..levels.max(1) as i64).contains(&b) || (k < inputs && b != 0))
+    {
+        return Err(bad(format!(
+            "member 'born': sample {k} at level {b} (input samples: 0; others: 0..{levels})"
+        )));
+    }
     let origin = f64_array(take("phi_origin")?, "phi_origin", &[Some(3)]).map_err(&bad)?;
     let voxel = f64_array(take("phi_voxel")?, "phi_voxel", &[])
         .map_err(&bad)?
@@ -237,6 +276,8 @@ pub fn read_msr(path: &Path) -> Result<Msr> {
             .chunks_exact(3)
             .map(|c| [c[0], c[1], c[2]])
             .collect(),
+        snap: v3(&snap.1),
+        born: born.iter().map(|&b| b as u32).collect(),
         samples: p3(&samples.1),
         details: (0..levels)
             .map(|i| v3(&details.1[3 * s * i..3 * s * (i + 1)]))

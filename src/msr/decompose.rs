@@ -2,14 +2,18 @@
 //! multiscale representation {W_1..W_N, φ_T}.
 //!
 //! The samples X_0 are the mesh vertices plus lattice points where the mesh is coarser than
-//! `sample_spacing` voxels ([`super::sample`]). The levels are t_i = i·T/N. For each level, φ
+//! `sample_spacing` voxels ([`super::sample`]), snapped onto the zero level set S_0 of φ_0 (the
+//! snap is kept, so the input comes back exactly). The levels are t_i = i·T/N. Before each
+//! level, the surface S_{i−1} gets new samples where it has none within `cover_radius` voxels
+//! ([`super::cover`]: the paper's "denser samples where needed"). For each level, φ
 //! is evolved from t_{i−1} to t_i by the chosen [`Velocity`] (threshold dynamics,
 //! [`crate::motion`]), redistanced over the whole grid (so the projection sees a true distance
 //! however far the samples must travel), and X_{i−1} is projected orthogonally onto its zero
 //! level set by Newton steps ([`super::project`]): X_i, W_i = X_i − X_{i−1}, and the scalar
 //! detail w_i = W_i·n_i with n_i = ∇φ(t_i)/|∇φ(t_i)| at X_i (positive outward).
 
-use super::project::{project_to_zero_level, LevelProjectOptions};
+use super::cover::cover_gaps;
+use super::project::{project_to_zero_level, LevelProjectOptions, Projected};
 use super::rescue::rescue_unconverged;
 use super::sample::sample_for_spacing;
 use super::{Msr, MsrParams};
@@ -37,6 +41,9 @@ pub struct DecomposeOptions {
     pub dt: Option<f64>,
     /// Largest distance between samples on the input (voxels).
     pub sample_spacing: f64,
+    /// Before each level, every point of S_{i−1} (the vertices of its marching-cubes surface)
+    /// with no sample within this distance (voxels) gets one; `None`: no new samples.
+    pub cover_radius: Option<f64>,
     /// Newton projection onto each level set.
     pub projection: LevelProjectOptions,
     /// The flow's own options.
@@ -54,6 +61,7 @@ impl Default for DecomposeOptions {
             velocity: Velocity::VolumePreserving,
             dt: None,
             sample_spacing: 1.0,
+            cover_radius: Some(0.5),
             projection: LevelProjectOptions::default(),
             flow: FlowOptions::default(),
             keep_level_sets: false,
@@ -143,13 +151,37 @@ pub fn decompose(
         level_sets.push(phi.clone());
     }
     let mut flow = Flow::new(opts.velocity, dt, opts.flow.clone())?;
-    let mut x = samples.points.clone();
+    let mut x: Vec<Point3<f64>> = project_with_rescue(&phi, &samples.points, &opts.projection)?
+        .iter()
+        .map(|p| p.point)
+        .collect();
+    let snap: Vec<Vector3<f64>> = x.iter().zip(&samples.points).map(|(a, b)| a - b).collect();
+    let mut born = vec![0u32; x.len()];
     let mut normals = vec![outward_normals(&phi, &x)];
-    let mut details = Vec::with_capacity(opts.levels);
-    let mut normal_details = Vec::with_capacity(opts.levels);
+    let mut details: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(opts.levels);
+    let mut normal_details: Vec<Vec<f64>> = Vec::with_capacity(opts.levels);
     let mut reports = Vec::with_capacity(opts.levels);
     let mut times = vec![0.0];
     for level in 1..=opts.levels {
+        if let Some(radius) = opts.cover_radius {
+            let new = cover_gaps(&phi, &x, radius * h, &opts.projection)?;
+            let total = x.len() + new.len();
+            normals
+                .last_mut()
+                .expect("n_0 is set")
+                .extend(outward_normals(&phi, &new));
+            for n in normals.iter_mut().rev().skip(1) {
+                n.resize(total, Vector3::zeros());
+            }
+            for w in &mut details {
+                w.resize(total, Vector3::zeros());
+            }
+            for w in &mut normal_details {
+                w.resize(total, 0.0);
+            }
+            born.resize(total, (level - 1) as u32);
+            x.extend(new);
+        }
         let mut last = None;
         for _ in 0..steps_per_level {
             let r = flow.step(&mut phi)?;
@@ -158,8 +190,7 @@ pub fn decompose(
         }
         let last = last.expect("at least one step per level");
         redistance(&mut phi, &RedistanceOptions::default())?;
-        let mut projected = project_to_zero_level(&phi, &x, &opts.projection);
-        rescue_unconverged(&phi, &x, &mut projected, &opts.projection)?;
+        let projected = project_with_rescue(&phi, &x, &opts.projection)?;
         let unconverged = projected.iter().filter(|p| !p.converged).count();
         let next: Vec<Point3<f64>> = projected.iter().map(|p| p.point).collect();
         let w: Vec<Vector3<f64>> = next.iter().zip(&x).map(|(a, b)| a - b).collect();
@@ -193,6 +224,8 @@ pub fn decompose(
         num_vertices: samples.num_vertices,
         extra_face: samples.extra_face,
         extra_bary: samples.extra_bary,
+        snap,
+        born,
         samples: x,
         details,
         normal_details,
@@ -215,6 +248,18 @@ pub fn decompose(
         reports,
         level_sets,
     })
+}
+
+/// The Newton projections of `points` onto the zero level set of `phi`, those that stall
+/// restarted from the marching-cubes surface ([`rescue_unconverged`]).
+fn project_with_rescue(
+    phi: &Grid3,
+    points: &[Point3<f64>],
+    opts: &LevelProjectOptions,
+) -> Result<Vec<Projected>> {
+    let mut projected = project_to_zero_level(phi, points, opts);
+    rescue_unconverged(phi, points, &mut projected, opts)?;
+    Ok(projected)
 }
 
 /// Unit outward normals ∇φ/|∇φ| (tricubic) at `points`; zero where the gradient vanishes or the

@@ -3,8 +3,9 @@
 //! sample points of the surface are followed across the scales of a curvature motion, and the
 //! displacements W_i between consecutive scales are the details; MSR = {W_1..W_N, φ_T}.
 //! `representation` holds the data, `archive` its `.npz` file, `sample` the sample points X_0,
-//! `project` the Newton projection onto a zero level set (`rescue` for the points where it stalls), `extend` and `reconstruct` the
-//! reconstruction by the level set.
+//! `cover` the samples added where a level's surface has none near, `project` the Newton
+//! projection onto a zero level set (`rescue` for the points where it stalls), `extend` and
+//! `reconstruct` the reconstruction by the level set.
 
 pub mod archive;
 pub mod cover;
@@ -16,4 +17,4 @@ pub mod representation;
 pub mod rescue;
 pub mod sample;
 
-pub use representation::{Msr, MsrParams};
+pub use representation::{LevelData, Msr, MsrParams};

@@ -24,6 +24,9 @@ const DISC_SOFTNESS: f64 = 0.1;
 /// A node takes tangent planes only if its nearest discs' samples are at most this many voxels
 /// off their normal lines through it.
 const LATERAL_REACH: f64 = 1.5;
+/// Spread σ of the weights of the tangent planes (voxels): a sample whose squared distance to
+/// the node exceeds the nearest's by σ² weighs e^(−1/2) of it.
+const PLANE_SPREAD: f64 = 0.25;
 
 /// Options of [`advect_back`].
 #[derive(Debug, Clone, Copy)]
@@ -40,6 +43,10 @@ pub struct AdvectOptions {
     /// X_{i−1} = X_i − W_i on S_{i−1} (the same data), which keeps the two banks of a fold that
     /// S_i has smoothed over apart.
     pub departure: Departure,
+    /// Every point of S_{i−1} has a sample within this distance (voxels): the decomposition's
+    /// [`super::decompose::DecomposeOptions::cover_radius`]. [`rebuild_from_tangent_planes`]
+    /// keeps each node's value no nearer to zero than its nearest sample's distance less this.
+    pub coverage: f64,
 }
 
 /// See [`AdvectOptions::departure`].
@@ -57,6 +64,7 @@ impl Default for AdvectOptions {
             extension_radius: 1.5,
             band_margin: 3.0,
             departure: Departure::default(),
+            coverage: 0.5,
         }
     }
 }
@@ -121,10 +129,18 @@ pub fn advect_back(
 
 /// φ_{i−1} from φ_i and the samples of S_{i−1} (X_{i−1}, with their outward normals n_{i−1} and
 /// the details W_i that took them to S_i): near the samples, each node takes its signed distance
-/// n·(x − X) to the tangent plane of the nearest sample's disc (a soft minimum; see below) (the
-/// semi-Lagrangian step φ_i(y) of [`advect_back`] carried with the rotation of the sample's frame
-/// from n_i to n_{i−1}, which to first order is exactly that distance); elsewhere the side comes
-/// from φ_i, at least `band_margin` voxels from the surface; then fast sweeping.
+/// n·(x − X) to the tangent planes of its nearest samples (the semi-Lagrangian step φ_i(y) of
+/// [`advect_back`] carried with the rotation of the sample's frame from n_i to n_{i−1}, which to
+/// first order is exactly that distance), averaged with weights that fall fast with the
+/// distance to the sample (Gaussian, σ = a quarter voxel beyond the nearest), so each node
+/// follows its own sheet where two sheets of S_{i−1} lie close, as the banks of a narrow sulcus
+/// do; elsewhere the side comes from φ_i, at least `band_margin` voxels from the surface; then
+/// fast sweeping.
+///
+/// The value is kept within what the samples allow: no farther from S_{i−1} than the nearest
+/// sample, d_min, and no nearer than d_min − `coverage` (every point of S_{i−1} has a sample
+/// within `coverage`), so a plane seen far from its sample, where the surface has curved away,
+/// cannot put a zero crossing where no sample is.
 /// Where S_i has closed a fold of S_{i−1} (a sulcus smoothed over), this keeps the fold's
 /// walls apart, which the plain translation of [`advect_back`] cannot.
 pub fn rebuild_from_tangent_planes(
@@ -141,14 +157,16 @@ pub fn rebuild_from_tangent_planes(
     // Farthest a node may be from its samples and still take their planes (see below).
     let reach = near + 2.0 * h;
     // Each sample stands for a small disc of S_{i−1} (its tangent plane within DISC_RADIUS
-    // voxels of it). A node takes the signed distance to the plane of the disc nearest to it
-    // (a soft minimum over its nearest samples): where two sheets of S_{i−1} lie close, as the
-    // banks of a narrow sulcus do, each node follows its own sheet rather than an average of
-    // both.
+    // voxels of it): the distance to the nearest disc and the node's lateral offset from it
+    // decide below whether the planes are trusted at all.
     let disc = DISC_RADIUS * h;
     let softness = DISC_SOFTNESS * h;
     let lateral_reach = LATERAL_REACH * h;
+    let two_sigma2 = 2.0 * (PLANE_SPREAD * h).powi(2);
+    let coverage = opts.coverage * h;
     let field = reduce_nearest(phi, previous, band, reach, ExtendFrom::Node, |x, found| {
+        let d2min = found.first()?.1;
+        let d_min = d2min.sqrt();
         let mut best = f64::INFINITY;
         let per: Vec<(f64, f64, f64)> = found
             .iter()
@@ -160,21 +178,24 @@ pub fn rebuild_from_tangent_planes(
                 (to_disc, along, lateral)
             })
             .collect();
-        let (mut sum, mut weight, mut lateral, mut moved) = (0.0, 0.0, 0.0, 0.0);
-        for (&(s, _), &(to_disc, along, lat)) in found.iter().zip(&per) {
+        let (mut weight, mut lateral, mut moved) = (0.0, 0.0, 0.0);
+        let (mut plane, mut plane_weight) = (0.0, 0.0);
+        for (&(s, d2), &(to_disc, along, lat)) in found.iter().zip(&per) {
             let w = (-(to_disc - best) / softness).exp();
-            sum += w * along;
             lateral += w * lat;
             moved += w * details[s].norm();
             weight += w;
+            let wp = (-(d2 - d2min) / two_sigma2).exp();
+            plane += wp * along;
+            plane_weight += wp;
         }
+        let value = plane / plane_weight;
+        let value = value
+            .abs()
+            .clamp((d_min - coverage).max(0.0), d_min)
+            .copysign(value);
         // (plane value, distance to the nearest disc, lateral offset, how far the samples moved)
-        Some(Vector4::new(
-            sum / weight,
-            best,
-            lateral / weight,
-            moved / weight,
-        ))
+        Some(Vector4::new(value, best, lateral / weight, moved / weight))
     });
     let mut out = phi.clone();
     for (v, f) in out.data_mut().iter_mut().zip(&field) {

@@ -2,7 +2,15 @@
 //! W_1..W_N (displacements of every sample from scale i−1 to scale i, paper Algorithm 1), their
 //! normal components w_i = W_i·n (positive outward), the scale times t_0..t_N, the level set
 //! φ_T of the coarsest shape, and the parameters used. Reconstruction by vertices (the paper's
-//! Remark 2.2(4)) is exact: since W_i = X_i − X_{i−1}, X_k = X_N − Σ_{i=k+1}^{N} W_i.
+//! Remark 2.2(4)) is exact: since W_i = X_i − X_{i−1}, X_k = X_N − Σ_{i=k+1}^{N} W_i, and the
+//! input is X_0 less the snap of each input sample onto the zero level set of φ_0.
+//!
+//! Two kinds of samples: those of the input (its vertices, then extra points on its triangles),
+//! which start on the mesh and are snapped onto S_0 = {φ_0 = 0} (the level set the
+//! decomposition and the level-set reconstruction work with, which differs from the mesh by a
+//! fraction of a voxel where the mesh has features finer than the grid); and samples added on
+//! S_b where the samples carried from the levels before left gaps (born at level b, with no
+//! detail before: W_i = 0 and n_i = 0 for i ≤ b, resp. i < b).
 
 use crate::grid::Grid3;
 use crate::TriMesh;
@@ -41,6 +49,11 @@ pub struct Msr {
     pub extra_face: Vec<u32>,
     /// ... and its barycentric coordinates in that face.
     pub extra_bary: Vec<[f64; 3]>,
+    /// For each input sample (the first `snap.len()` = `num_vertices + extra_face.len()`
+    /// samples): X_0 − its position on the input mesh.
+    pub snap: Vec<Vector3<f64>>,
+    /// For every sample: the level at which it joined (0 for the input's; see the module doc).
+    pub born: Vec<u32>,
     /// X_N: every sample at the coarsest scale.
     pub samples: Vec<Point3<f64>>,
     /// `details[i − 1]` = W_i = X_i − X_{i−1}, one vector per sample.
@@ -64,7 +77,8 @@ impl Msr {
         self.details.len()
     }
 
-    /// X_k, the samples at scale k (0 = the input, N = the coarsest): X_N − Σ_{i=k+1}^{N} W_i.
+    /// X_k, the samples at scale k (on S_k; 0 = the finest, N = the coarsest):
+    /// X_N − Σ_{i=k+1}^{N} W_i. A sample born after k is at its position at birth.
     pub fn samples_at(&self, k: usize) -> Vec<Point3<f64>> {
         let mut x = self.samples.clone();
         for w in self.details.iter().skip(k) {
@@ -75,10 +89,60 @@ impl Msr {
         x
     }
 
-    /// S_k as a mesh: the original triangles on the vertex samples of scale k.
+    /// The input samples where they were on the input mesh (X_0 less the snap): its vertices,
+    /// then the extra points on its triangles.
+    pub fn input_samples(&self) -> Vec<Point3<f64>> {
+        let mut x = self.samples_at(0);
+        x.truncate(self.snap.len());
+        for (p, s) in x.iter_mut().zip(&self.snap) {
+            *p -= s;
+        }
+        x
+    }
+
+    /// S_k as a mesh: the original triangles on the vertex samples of scale k; for k = 0 the
+    /// input mesh itself (X_0 less the snap).
     pub fn mesh_at(&self, k: usize) -> TriMesh {
-        let mut x = self.samples_at(k);
+        let mut x = if k == 0 {
+            self.input_samples()
+        } else {
+            self.samples_at(k)
+        };
         x.truncate(self.num_vertices);
         TriMesh::new(x, self.faces.clone())
     }
+
+    /// What the level-set reconstruction of S_{i−1} from S_i reads (1 ≤ i ≤ N): the samples
+    /// that exist at level i − 1, as (X_{i−1}, n_{i−1}, W_i).
+    pub fn level_data(&self, i: usize) -> LevelData {
+        let x = self.samples_at(i - 1);
+        let mut out = LevelData::default();
+        for (k, p) in x.iter().enumerate() {
+            if (self.born[k] as usize) < i {
+                out.points.push(*p);
+                out.normals.push(self.normals[i - 1][k]);
+                out.details.push(self.details[i - 1][k]);
+            }
+        }
+        out
+    }
+
+    /// The normal details w_i of the samples that exist at level i − 1 (1 ≤ i ≤ N).
+    pub fn level_normal_details(&self, i: usize) -> Vec<f64> {
+        (self.normal_details[i - 1].iter().zip(&self.born))
+            .filter(|(_, &b)| (b as usize) < i)
+            .map(|(w, _)| *w)
+            .collect()
+    }
+}
+
+/// The samples of one level of an [`Msr`] ([`Msr::level_data`]).
+#[derive(Debug, Clone, Default)]
+pub struct LevelData {
+    /// X_{i−1}.
+    pub points: Vec<Point3<f64>>,
+    /// n_{i−1}.
+    pub normals: Vec<Vector3<f64>>,
+    /// W_i = X_i − X_{i−1}.
+    pub details: Vec<Vector3<f64>>,
 }
