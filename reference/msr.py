@@ -18,7 +18,7 @@ The algorithm follows Dong, Chien, Shen and Osher (level-set multiscale represen
   (`scipy.spatial.cKDTree`) of its signed distance to their tangent planes, its magnitude kept
   within [d_min − `coverage`, d_min] (d_min: the nearest sample's distance); elsewhere the side
   of φ_i (at least `band_margin` voxels from the surface); then distance_transform_edt.
-  (vesselmsr also adds samples where a level's surface has none within h/2, from its
+  (vesselmsr also adds samples where a level's surface has none within h/4, from its
   marching-cubes surface; this reference does not, which only makes it cheaper.)
 
 CLI: `python msr.py PHI.npy POINTS.f64 DT STEPS LEVELS` prints one JSON line with "seconds"
@@ -152,7 +152,7 @@ def rebuild_from_tangent_planes(
     band_margin: float = 3.0,
     k: int = 8,
     spread: float = 0.25,
-    coverage: float = 0.5,
+    coverage: float = 0.25,
 ) -> np.ndarray:
     """φ_{i−1} from φ_i = `phi` and the samples of S_{i−1} (see the module doc)."""
     from scipy.spatial import cKDTree

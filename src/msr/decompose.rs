@@ -61,7 +61,7 @@ impl Default for DecomposeOptions {
             velocity: Velocity::VolumePreserving,
             dt: None,
             sample_spacing: 1.0,
-            cover_radius: Some(0.5),
+            cover_radius: Some(0.25),
             projection: LevelProjectOptions::default(),
             flow: FlowOptions::default(),
             keep_level_sets: false,

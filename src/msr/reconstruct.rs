@@ -64,7 +64,7 @@ impl Default for AdvectOptions {
             extension_radius: 1.5,
             band_margin: 3.0,
             departure: Departure::default(),
-            coverage: 0.5,
+            coverage: 0.25,
         }
     }
 }
