@@ -7,8 +7,9 @@
 //! level, the surface S_{i−1} gets new samples where it has none within `cover_radius` voxels
 //! ([`super::cover`]: the paper's "denser samples where needed"). For each level, φ
 //! is evolved from t_{i−1} to t_i by the chosen [`Velocity`] (threshold dynamics,
-//! [`crate::motion`]), redistanced over the whole grid (so the projection sees a true distance
-//! however far the samples must travel), and X_{i−1} is projected orthogonally onto its zero
+//! [`crate::motion`]; the flow keeps φ a signed distance within its band, and φ is redistanced
+//! over the whole grid only when a sample lies near the band's edge, so the projection always
+//! sees a true distance however far the samples must travel), and X_{i−1} is projected orthogonally onto its zero
 //! level set by Newton steps ([`super::project`]): X_i, W_i = X_i − X_{i−1}, and the scalar
 //! detail w_i = W_i·n_i with n_i = ∇φ(t_i)/|∇φ(t_i)| at X_i (positive outward).
 
@@ -151,6 +152,7 @@ pub fn decompose(
         level_sets.push(phi.clone());
     }
     let mut flow = Flow::new(opts.velocity, dt, opts.flow.clone())?;
+    let band = opts.flow.band_width(&opts.velocity, dt, h);
     let mut x: Vec<Point3<f64>> = project_with_rescue(&phi, &samples.points, &opts.projection)?
         .iter()
         .map(|p| p.point)
@@ -189,7 +191,15 @@ pub fn decompose(
             last = Some(r);
         }
         let last = last.expect("at least one step per level");
-        redistance(&mut phi, &RedistanceOptions::default())?;
+        // The flow leaves φ a signed distance within its band; beyond, the projection needs it
+        // redistanced over the whole grid (the tricubic stencil reaches 2 voxels out).
+        let farthest = x
+            .par_iter()
+            .map(|p| phi.sample_trilinear(p).map_or(f64::INFINITY, f64::abs))
+            .reduce(|| 0.0, f64::max);
+        if farthest > band - 3.0 * h {
+            redistance(&mut phi, &RedistanceOptions::default())?;
+        }
         let projected = project_with_rescue(&phi, &x, &opts.projection)?;
         let unconverged = projected.iter().filter(|p| !p.converged).count();
         let next: Vec<Point3<f64>> = projected.iter().map(|p| p.point).collect();
