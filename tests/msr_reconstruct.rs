@@ -132,12 +132,17 @@ fn tangent_planes_of_the_previous_samples_rebuild_the_surface() {
         normals.push(g.normalize());
         details.push(p - (c + n * r));
     }
+    // The samples are one voxel apart (no samples added as the decomposition does): they cover
+    // the surface within half a voxel.
     let back = rebuild_from_tangent_planes(
         &phi,
         &previous,
         &normals,
         &details,
-        &AdvectOptions::default(),
+        &AdvectOptions {
+            coverage: 0.5,
+            ..AdvectOptions::default()
+        },
     )
     .unwrap();
     let err = radial_error(&back, c, |n| R - a - b * n.z);

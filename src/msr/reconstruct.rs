@@ -43,9 +43,11 @@ pub struct AdvectOptions {
     /// X_{i−1} = X_i − W_i on S_{i−1} (the same data), which keeps the two banks of a fold that
     /// S_i has smoothed over apart.
     pub departure: Departure,
-    /// Every point of S_{i−1} has a sample within this distance (voxels): the decomposition's
-    /// [`super::decompose::DecomposeOptions::cover_radius`]. [`rebuild_from_tangent_planes`]
-    /// keeps each node's value no nearer to zero than its nearest sample's distance less this.
+    /// Every point of S_{i−1} has a sample within about this distance (voxels). Default: the
+    /// decomposition's [`super::decompose::DecomposeOptions::cover_radius`] (samples a quarter
+    /// voxel around each vertex of the marching-cubes surface); samples spaced s apart and no
+    /// more cover s/2. [`rebuild_from_tangent_planes`] keeps each node's value no nearer to zero
+    /// than its nearest sample's distance less this.
     pub coverage: f64,
 }
 
@@ -209,12 +211,12 @@ pub fn rebuild_from_tangent_planes(
             _ => {}
         }
     }
-    // A band is enough for marching cubes and for the next level's rebuild (which reads φ's sign
-    // beyond it and takes distances only near the samples).
+    // A band is enough for marching cubes and for the next level's rebuild, which reads φ's sign
+    // beyond `near` and takes distances only near the samples.
     redistance(
         &mut out,
         &RedistanceOptions {
-            band: Some(band.max(8.0 * h)),
+            band: Some(reach + h),
             ..RedistanceOptions::default()
         },
     )?;
