@@ -138,7 +138,8 @@ fn nearest_to(pos: &[f64], ids: &[u32], x: f64) -> (f64, u32) {
     (best, who)
 }
 
-/// Scratch of [`envelope`]: parabola centres and the left ends of their stretches.
+/// Scratch of [`envelope`] (parabola centres and the left ends of their stretches) and lines
+/// of input and output.
 #[derive(Default)]
 struct Scratch {
     v: Vec<usize>,
@@ -159,21 +160,28 @@ impl Scratch {
             buf.resize(n, NONE);
         }
     }
+
+    /// [`envelope`] of the first `n` entries of the scratch lines.
+    fn envelope(&mut self, n: usize) {
+        envelope(
+            &mut self.v,
+            &mut self.z,
+            (&self.f[..n], &self.fid[..n]),
+            (&mut self.d[..n], &mut self.id[..n]),
+        );
+    }
 }
 
 /// The lower envelope of the parabolas f[q] + (p − q)² (q = 0..n, ∞ skipped) at every p:
-/// `s.d[p]` = min over q, `s.id[p]` the id of the minimising q (from `s.fid`); ∞ and [`NONE`]
-/// when every f[q] is ∞.
-fn envelope(s: &mut Scratch, n: usize) {
-    let Scratch {
-        v,
-        z,
-        f,
-        fid,
-        d,
-        id,
-        ..
-    } = s;
+/// `d[p]` = min over q, `id[p]` the id of the minimising q (from `fid`); ∞ and [`NONE`] when
+/// every f[q] is ∞. `v` and `z` are scratch.
+fn envelope(
+    v: &mut Vec<usize>,
+    z: &mut Vec<f64>,
+    (f, fid): (&[f64], &[u32]),
+    (d, id): (&mut [f64], &mut [u32]),
+) {
+    let n = f.len();
     v.clear();
     z.clear();
     for q in 0..n {
@@ -200,8 +208,8 @@ fn envelope(s: &mut Scratch, n: usize) {
         }
     }
     if v.is_empty() {
-        d[..n].fill(f64::INFINITY);
-        id[..n].fill(NONE);
+        d.fill(f64::INFINITY);
+        id.fill(NONE);
         return;
     }
     let mut m = 0;
@@ -283,7 +291,7 @@ where
                         s.f[j] = tmp_d[i + nx * j];
                         s.fid[j] = tmp_id[i + nx * j];
                     }
-                    envelope(s, ny);
+                    s.envelope(ny);
                     for j in 0..ny {
                         xy_d[i + nx * j] = s.d[j];
                         xy_id[i + nx * j] = s.id[j];
@@ -302,7 +310,7 @@ where
                     let r = j * nx..(j + 1) * nx;
                     s.f[..nx].copy_from_slice(&tmp_d[r.clone()]);
                     s.fid[..nx].copy_from_slice(&tmp_id[r.clone()]);
-                    envelope(s, nx);
+                    s.envelope(nx);
                     for (t, q) in r.enumerate() {
                         if s.d[t] < xy_d[q] {
                             xy_d[q] = s.d[t];
@@ -317,7 +325,7 @@ where
                         let (pos, ids) = lines[2].line(i + nx * j);
                         (s.f[i], s.fid[i]) = nearest_to(pos, ids, k as f64);
                     }
-                    envelope(s, nx);
+                    s.envelope(nx);
                     let r = j * nx..(j + 1) * nx;
                     tmp_d[r.clone()].copy_from_slice(&s.d[..nx]);
                     tmp_id[r].copy_from_slice(&s.id[..nx]);
@@ -327,7 +335,7 @@ where
                         s.f[j] = tmp_d[i + nx * j];
                         s.fid[j] = tmp_id[i + nx * j];
                     }
-                    envelope(s, ny);
+                    s.envelope(ny);
                     for j in 0..ny {
                         zc_d[i + nx * j] = s.d[j];
                         zc_id[i + nx * j] = s.id[j];
@@ -335,28 +343,44 @@ where
                 }
             },
         );
-    // Classes x and y: the envelope along z, per y-layer of columns; the nearer of that and
-    // class z. Results per y-layer, (i, k) with k fastest.
+    // Classes x and y: the envelope along z, per y-layer of columns, in blocks of adjacent
+    // columns (read and written a row of the block at a time); the nearer of that and class z.
+    // Results per y-layer, (i, k) with i fastest.
+    const BLOCK: usize = 16;
     let columns: Vec<Vec<T>> = (0..ny)
         .into_par_iter()
         .map_init(Scratch::default, |s, j| {
-            s.lines(nz);
             let mut out = vec![T::default(); nx * nz];
-            for i in 0..nx {
+            let width = BLOCK.min(nx);
+            s.lines(width * nz);
+            for i0 in (0..nx).step_by(BLOCK) {
+                let w = width.min(nx - i0);
                 for k in 0..nz {
-                    let q = i + nx * (j + ny * k);
-                    s.f[k] = xy_d[q];
-                    s.fid[k] = xy_id[q];
+                    let q = i0 + nx * (j + ny * k);
+                    for b in 0..w {
+                        s.f[b * nz + k] = xy_d[q + b];
+                        s.fid[b * nz + k] = xy_id[q + b];
+                    }
                 }
-                envelope(s, nz);
+                for b in 0..w {
+                    let r = b * nz..(b + 1) * nz;
+                    envelope(
+                        &mut s.v,
+                        &mut s.z,
+                        (&s.f[r.clone()], &s.fid[r.clone()]),
+                        (&mut s.d[r.clone()], &mut s.id[r]),
+                    );
+                }
                 for k in 0..nz {
-                    let q = i + nx * (j + ny * k);
-                    let (d, id) = if zc_d[q] < s.d[k] {
-                        (zc_d[q], zc_id[q])
-                    } else {
-                        (s.d[k], s.id[k])
-                    };
-                    out[i * nz + k] = finish(q, [i, j, k], d, id);
+                    let q = i0 + nx * (j + ny * k);
+                    for b in 0..w {
+                        let (d, id) = if zc_d[q + b] < s.d[b * nz + k] {
+                            (zc_d[q + b], zc_id[q + b])
+                        } else {
+                            (s.d[b * nz + k], s.id[b * nz + k])
+                        };
+                        out[k * nx + i0 + b] = finish(q + b, [i0 + b, j, k], d, id);
+                    }
                 }
             }
             out
@@ -365,9 +389,7 @@ where
     let mut all = vec![T::default(); n];
     all.par_chunks_mut(layer).enumerate().for_each(|(k, slab)| {
         for (j, col) in columns.iter().enumerate() {
-            for i in 0..nx {
-                slab[i + nx * j] = col[i * nz + k];
-            }
+            slab[j * nx..(j + 1) * nx].copy_from_slice(&col[k * nx..(k + 1) * nx]);
         }
     });
     all
