@@ -278,7 +278,13 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         )
         .map(|_| ())
     };
-    let mut phi0 = voxelize(&closed_input, dims, transform, &VoxelizeOptions::default())?;
+    // The input cut open at D (for the stitch) meanwhile: mesh work that the voxelizer's
+    // sequential sign flood leaves a core free for.
+    let (phi0, cut) = rayon::join(
+        || voxelize(&closed_input, dims, transform, &VoxelizeOptions::default()),
+        || cut_out(&closed_input, balls),
+    );
+    let mut phi0 = phi0?;
     // True distances away from the surface too: the fills compare and interpolate them. The
     // axial fill reads φ_0 only within a few voxels of ∂D (where its lines leave D, and over the
     // blend band); beyond, the voxelizer's band is all marching cubes needs. There, the
@@ -301,7 +307,6 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     }
     lap("voxelize", &mut timings);
     let depth = region_depth(&phi0, balls);
-    let cut = cut_out(&closed_input, balls);
     let unknown = region_mask(&depth);
     // R: the largest inside distance in a shell just outside D.
     let radius_estimate = phi0

@@ -18,7 +18,7 @@ use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
 use super::{Layout, BAND};
-use crate::bvh::{closest_point_on_triangle, MeshBvh};
+use crate::bvh::{closest_point_on_triangle, MeshBvh, TrianglePoints};
 use crate::TriMesh;
 
 /// A triangle's footprint on the grid: node ranges of its grown box and its plane.
@@ -123,6 +123,7 @@ pub(super) fn band_distances(
                 for &t in tris {
                     let f = &footprints[t as usize];
                     let [a, b, c] = bvh.slot_triangle(f.slot);
+                    let tri = TrianglePoints::new(a, b, c);
                     for jj in f.j[0]..=f.j[1] {
                         let y = o[1] + jj as f64 * h;
                         let Some([i0, i1]) = f.row(y, z, o[0], h, nx) else {
@@ -141,7 +142,7 @@ pub(super) fn band_distances(
                                     continue;
                                 }
                             }
-                            let (x, _) = closest_point_on_triangle(&p, a, b, c);
+                            let (x, _) = tri.closest_point(&p);
                             let d2 = (p - x).norm_squared();
                             if d2 < *m {
                                 *m = d2;
