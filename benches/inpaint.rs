@@ -32,8 +32,9 @@
 //!    rounds' ratios, both sides of a round under the same load); the ratio compares like with like: the
 //!    reference's seconds against our "voxelize" + "fill" phases (which also redistance).
 //!
-//! Measured 2026-12-02 (2 cores shared, load 1.3–1.8), with the fill united with the input and
-//! the stitch's shallow cuts:
+//! Measured 2026-12-02 (2 cores shared, load 2.8–3.9: another job on both cores), with the fill
+//! united with the input, the stitch's shallow cuts, and φ_0's core redistanced by the
+//! closest-point transform ((a) and (b) the same as with the sweeps, to the digits shown):
 //! (a) Hausdorff in D (h) / volume error in D, axial | flow | msr | paper | close-holes | Poisson:
 //! tube 0.22/−0.47% | 1.17/+16.8% | 3.49/−11.7% | 5.19/−16.9% | 9.43/−24.8% | 9.38/−24.7%;
 //! curved 4.61/+7.5% | 7.88/−21.1% | 4.15/−17.0% | 7.09/−26.7% | 7.95/−34.0% | 7.94/−33.8%;
@@ -41,7 +42,7 @@
 //! stenosis 0.14/−2.0% | 2.41/+29.7% | 3.98/−35.0% | 3.97/−34.7% | 4.03/−35.0% | 4.03/−34.9%;
 //! occlusion 0.04/−0.3% | 0.92/+16.3% | 1.14/−6.4% | 2.97/−14.2% | 7.97/−24.6% | 7.97/−24.5%.
 //! Best: axial on four; on the curved tube msr by Hausdorff (axial close behind). axial takes
-//! 0.1–0.2 s, msr 0.9–2.8 s, flow and paper 3–12 s. Every axial output: manifold3d NoError,
+//! 0.03–0.07 s, msr 0.5–1.6 s, flow and paper 2.3–5.3 s. Every axial output: manifold3d NoError,
 //! outward, one component, stitched, every input triangle outside D kept.
 //! (b) 15 cases (the aneurysm's 3 points away from its open ends only): medians axial 1.91 h /
 //! 3.27% (best on 13 of 15), msr 6.31 h / 31.6% (its coarse level may now reach the sub-box's
@@ -50,10 +51,13 @@
 //! ica_aneurysm_c0015#2 (a chop of the aneurysm's sac, not of a tube) 13.69 h / −46.8%.
 //! Every axial output: manifold3d NoError, outward, one component, stitched (msr 15 of 15 too),
 //! every input triangle outside D kept.
-//! (c) sub-box 82³ at h = 0.328 (both sides), 7 rounds: ours 0.19–0.22 s (voxelize 0.15 s, fill
-//! 0.04 s), the reference 2.06 s at best (libigl signed distance 1.84 s, fill 0.21 s); median
-//! ratio 11.6× (rounds 8.4–13.5) in one run and 9.9× (9.5–11.0) in the next, a minute later;
-//! volume in D of the filled φ 1903.0 (reference) against 1902.2 (our repaired mesh).
+//! (c) sub-box 82³ at h = 0.328 (both sides), 7 rounds, three runs in a row: ours 0.100 s,
+//! 0.113 s and 0.072 s at best (voxelize 0.056–0.089 s, of which the core's closest-point
+//! transform about a third; fill 0.016–0.024 s), the reference 1.90 s, 1.89 s and 1.04 s at best
+//! (libigl signed distance 0.93–1.78 s, fill 0.10–0.16 s; the machine's speed changed between
+//! runs); median ratios 16.7× (rounds 13.2–19.6), 16.7× (15.6–17.2) and 16.3× (14.5–16.8).
+//! Before the transform (closest-point sweeps on the core, ~75 ms of ours), 11.6× and 9.9×.
+//! Volume in D of the filled φ 1903.0 (reference) against 1902.2 (our repaired mesh).
 //!
 //! Run: `cargo bench --bench inpaint` (`-- phantoms` for (a) only, `-- real` for (b), `-- speed`
 //! for (c);

@@ -98,26 +98,64 @@ pub fn closest_point_on_triangle(
     b: &Point3<f64>,
     c: &Point3<f64>,
 ) -> (Point3<f64>, [f64; 3]) {
-    let ab: Vector3<f64> = b - a;
-    let ac: Vector3<f64> = c - a;
+    TrianglePoints::new(a, b, c).closest_point(p)
+}
 
-    // The region tests assume a proper triangle. Without area (collinear corners, a zero-length
-    // edge) the closest point is on an edge. On a sliver (sin² of the angle at a below SLIVER)
-    // rounding can misclassify the regions; every candidate lies on the triangle, so the nearer of
-    // the region answer and the nearest edge is then taken.
-    let (ab2, ac2, abac) = (ab.norm_squared(), ac.norm_squared(), ab.dot(&ac));
-    let gram = ab2 * ac2 - abac * abac;
-    if gram.is_nan() || gram <= 0.0 {
-        return closest_on_edges(p, a, b, c);
-    }
-    let region = closest_by_regions(p, a, b, c, &ab, &ac);
-    if gram < SLIVER * ab2 * ac2 {
-        let edge = closest_on_edges(p, a, b, c);
-        if (p - edge.0).norm_squared() < (p - region.0).norm_squared() {
-            return edge;
+/// A triangle with what the closest-point query derives from its corners alone, for many
+/// queries against one triangle ([`closest_point_on_triangle`] is the one-off form: the same
+/// answer, bit for bit).
+#[derive(Debug, Clone, Copy)]
+pub struct TrianglePoints {
+    a: Point3<f64>,
+    b: Point3<f64>,
+    c: Point3<f64>,
+    ab: Vector3<f64>,
+    ac: Vector3<f64>,
+    /// No area (or NaN): the nearest edge.
+    degenerate: bool,
+    /// A sliver: the nearer of the region answer and the nearest edge.
+    sliver: bool,
+}
+
+impl TrianglePoints {
+    /// The triangle (a, b, c).
+    pub fn new(a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>) -> Self {
+        let ab: Vector3<f64> = b - a;
+        let ac: Vector3<f64> = c - a;
+        let (ab2, ac2, abac) = (ab.norm_squared(), ac.norm_squared(), ab.dot(&ac));
+        let gram = ab2 * ac2 - abac * abac;
+        let degenerate = gram.is_nan() || gram <= 0.0;
+        TrianglePoints {
+            a: *a,
+            b: *b,
+            c: *c,
+            ab,
+            ac,
+            degenerate,
+            sliver: !degenerate && gram < SLIVER * ab2 * ac2,
         }
     }
-    region
+
+    /// [`closest_point_on_triangle`] of `p` on this triangle.
+    #[inline]
+    pub fn closest_point(&self, p: &Point3<f64>) -> (Point3<f64>, [f64; 3]) {
+        let (a, b, c) = (&self.a, &self.b, &self.c);
+        // The region tests assume a proper triangle. Without area (collinear corners, a
+        // zero-length edge) the closest point is on an edge. On a sliver (sin² of the angle at
+        // a below SLIVER) rounding can misclassify the regions; every candidate lies on the
+        // triangle, so the nearer of the region answer and the nearest edge is then taken.
+        if self.degenerate {
+            return closest_on_edges(p, a, b, c);
+        }
+        let region = closest_by_regions(p, a, b, c, &self.ab, &self.ac);
+        if self.sliver {
+            let edge = closest_on_edges(p, a, b, c);
+            if (p - edge.0).norm_squared() < (p - region.0).norm_squared() {
+                return edge;
+            }
+        }
+        region
+    }
 }
 
 /// Ericson's region classification proper (the triangle has area).

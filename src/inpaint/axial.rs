@@ -70,42 +70,71 @@ pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vec<Vector3<f64>>]) -
         let q = p + dir * s;
         source.sample_trilinear(&q).map(|v| (s, v))
     };
-    let filled: Vec<(usize, f32)> = (0..source.data().len())
-        .into_par_iter()
-        .filter_map(|n| {
-            let (i, j, k) = (n % nx, (n / nx) % ny, n / (nx * ny));
-            let p = t.index_to_world(Vector3::new(i as f64, j as f64, k as f64));
-            let (d, b) = deepest_ball(balls, &p);
-            if d <= 0.0 {
-                return None;
-            }
-            // Each candidate axis gives a value; the line whose two ends agree best runs along
-            // a vessel (on a straight tube they agree exactly).
-            // Lines whose ends lie on the same side of the surface come first.
-            let mut best: Option<(f64, (bool, f64))> = None;
-            for a in &axes[b] {
-                let (value, rank) = match (exit(&p, a), exit(&p, &-a)) {
-                    (Some((tp, vp)), Some((tm, vm))) => (
-                        (tm * vp + tp * vm) / (tp + tm),
-                        ((vp < 0.0) != (vm < 0.0), (vp - vm).abs()),
-                    ),
-                    (Some((_, v)), None) | (None, Some((_, v))) => (v, (true, f64::INFINITY)),
-                    (None, None) => continue,
+    // Only nodes within the balls' bounding box can lie in D: per z-layer of that box, the
+    // layer's rows within it, written in place.
+    let [lo, hi] = [0, 1].map(|side| {
+        let mut out = [0usize; 3];
+        for a in 0..3 {
+            let ext = balls.iter().map(|b| {
+                let v = if side == 0 {
+                    b.center[a] - b.radius
+                } else {
+                    b.center[a] + b.radius
                 };
-                if best.is_none_or(|(_, r)| rank < r) {
-                    best = Some((value, rank));
+                (v - t.origin[a]) / h
+            });
+            let v = if side == 0 {
+                ext.fold(f64::INFINITY, f64::min).floor()
+            } else {
+                ext.fold(f64::NEG_INFINITY, f64::max).ceil()
+            };
+            out[a] = v.clamp(0.0, (phi.dims()[a] - 1) as f64) as usize;
+        }
+        out
+    });
+    let layer = nx * ny;
+    let value_at = |i: usize, j: usize, k: usize| -> Option<f32> {
+        let p = t.index_to_world(Vector3::new(i as f64, j as f64, k as f64));
+        let (d, b) = deepest_ball(balls, &p);
+        if d <= 0.0 {
+            return None;
+        }
+        // Each candidate axis gives a value; the line whose two ends agree best runs along
+        // a vessel (on a straight tube they agree exactly).
+        // Lines whose ends lie on the same side of the surface come first.
+        let mut best: Option<(f64, (bool, f64))> = None;
+        for a in &axes[b] {
+            let (value, rank) = match (exit(&p, a), exit(&p, &-a)) {
+                (Some((tp, vp)), Some((tm, vm))) => (
+                    (tm * vp + tp * vm) / (tp + tm),
+                    ((vp < 0.0) != (vm < 0.0), (vp - vm).abs()),
+                ),
+                (Some((_, v)), None) | (None, Some((_, v))) => (v, (true, f64::INFINITY)),
+                (None, None) => continue,
+            };
+            if best.is_none_or(|(_, r)| rank < r) {
+                best = Some((value, rank));
+            }
+        }
+        Some(best.map_or(source.data()[i + nx * (j + ny * k)], |(v, _)| v as f32))
+    };
+    let filled: usize = phi
+        .data_mut()
+        .par_chunks_mut(layer)
+        .enumerate()
+        .filter(|(k, _)| (lo[2]..=hi[2]).contains(k))
+        .map(|(k, slab)| {
+            let mut count = 0;
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    if let Some(v) = value_at(i, j, k) {
+                        slab[i + nx * j] = v;
+                        count += 1;
+                    }
                 }
             }
-            let value = match best {
-                Some((v, _)) => v,
-                None => return Some((n, source.data()[n])),
-            };
-            Some((n, value as f32))
+            count
         })
-        .collect();
-    let data = phi.data_mut();
-    for &(n, v) in &filled {
-        data[n] = v;
-    }
-    Ok(filled.len())
+        .sum();
+    Ok(filled)
 }

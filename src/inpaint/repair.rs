@@ -6,8 +6,9 @@
 //!    the cost follows the size of D, not of the vessel tree.
 //! 2. φ_0: signed distance of the (closed) input on the sub-box (winding-number sign, so holes
 //!    are tolerated), redistanced so that the fills compare true distances: over the whole
-//!    sub-box for the flows, within 3 voxels of the regions' box for the axial fill (which reads
-//!    φ_0 only near ∂D).
+//!    sub-box for the flows (closest-point sweeps), within 3 voxels of the regions' box for the
+//!    axial fill (which reads φ_0 only near ∂D; by the closest-point transform, which finds the
+//!    nearest crossing exactly and in a fixed number of passes).
 //! 3. Fill D by one of the methods ([`InpaintMethod`]), unite it with the input (min(ψ, φ_0):
 //!    the damage is missing volume, so nothing the input has is taken away), blend the result
 //!    into φ_0 over a band inside ∂D (no seam), remove pieces that float in D or voids sealed in
@@ -27,7 +28,7 @@ use super::stitch::{cut_out, stitch_patch};
 use super::topology::remove_islands;
 use crate::grid::{spec::default_voxel, Grid3, GridTransform, SubBox};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
-use crate::levelset::redistance::{redistance, RedistanceOptions};
+use crate::levelset::redistance::{redistance, RedistanceOptions, RedistanceScheme};
 use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
 use crate::mesh::cap::{cap_holes, CapOptions};
 use crate::mesh::measures::{bounding_box, mean_edge_length};
@@ -277,23 +278,35 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         )
         .map(|_| ())
     };
-    let mut phi0 = voxelize(&closed_input, dims, transform, &VoxelizeOptions::default())?;
+    // The input cut open at D (for the stitch) meanwhile: mesh work that the voxelizer's
+    // sequential sign flood leaves a core free for.
+    let (phi0, cut) = rayon::join(
+        || voxelize(&closed_input, dims, transform, &VoxelizeOptions::default()),
+        || cut_out(&closed_input, balls),
+    );
+    let mut phi0 = phi0?;
     // True distances away from the surface too: the fills compare and interpolate them. The
     // axial fill reads φ_0 only within a few voxels of ∂D (where its lines leave D, and over the
-    // blend band); beyond, the voxelizer's band is all marching cubes needs. The flows evolve
-    // the whole sub-box.
+    // blend band); beyond, the voxelizer's band is all marching cubes needs. There, the
+    // closest-point transform: the sweeps' measure with the nearest crossing found exactly, at
+    // a fixed cost (about 2.5× faster on the ~76³ core). The flows evolve the whole sub-box.
     match opts.method {
         InpaintMethod::Axial => {
             let core = nodes_around(&sub_origin, h, dims, balls, AXIAL_CORE_VOXELS * h);
             let mut inner = phi0.extract(&core)?;
-            redistance_full(&mut inner)?;
+            redistance(
+                &mut inner,
+                &RedistanceOptions {
+                    scheme: RedistanceScheme::ClosestPointTransform,
+                    ..RedistanceOptions::default()
+                },
+            )?;
             phi0.write_back(&core, &inner)?;
         }
         _ => redistance_full(&mut phi0)?,
     }
     lap("voxelize", &mut timings);
     let depth = region_depth(&phi0, balls);
-    let cut = cut_out(&closed_input, balls);
     let unknown = region_mask(&depth);
     // R: the largest inside distance in a shell just outside D.
     let radius_estimate = phi0

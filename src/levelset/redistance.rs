@@ -23,6 +23,12 @@
 //!      spheres and cylinders). |∇φ| = 1 to well under 1% away from the medial axis; errors are
 //!      thousandths of a voxel on smooth shapes, tenths of a voxel at sharp edges and corners
 //!      (which the grid rounds).
+//!    * [`RedistanceScheme::ClosestPointTransform`]: the same measure to the patch of the
+//!      interface node whose crossing point is nearest, that node found exactly, without sweeps,
+//!      by a separable squared-distance transform (`transform`: lower envelopes of parabolas
+//!      along one axis at a time, Felzenszwalb and Huttenlocher 2012). A fixed handful of passes
+//!      over the grid: several times faster than the sweeps on a whole grid, and never further
+//!      from the distance (the sweeps offer a node only what its upwind neighbours carry).
 //!    * [`RedistanceScheme::Godunov`]: the first-order Godunov upwind discretisation of |∇φ| = 1
 //!      (the 1-, 2- and 3-neighbour cases) of \[TCOZ\]/Zhao 2005, from the same frozen values.
 //!      Its viscosity error makes φ grow slightly faster than the distance near curved
@@ -40,6 +46,7 @@
 
 mod init;
 mod sweep;
+mod transform;
 
 use crate::grid::Grid3;
 use crate::{Error, Result};
@@ -55,6 +62,12 @@ pub enum RedistanceScheme {
     /// First-order Godunov upwind update of |∇φ| = 1 (Zhao 2005, \[TCOZ\]); overestimates the
     /// distance slightly, more the farther from a curved interface.
     Godunov,
+    /// The interface node with the nearest crossing point found exactly by a separable
+    /// distance transform instead of carried by sweeps, and the distance to its patch as
+    /// [`RedistanceScheme::ClosestPoint`] measures it; no sweeps (`max_sweeps` and `tolerance`
+    /// unused; the report says 0 sweeps, converged). The cost does not grow with the distances;
+    /// with a band, it is that of the whole grid all the same.
+    ClosestPointTransform,
 }
 
 /// Options of [`redistance`].
@@ -93,7 +106,8 @@ pub struct RedistanceReport {
     /// Frozen nodes next to the interface (a sign change along a grid edge, or φ = 0). Zero means
     /// φ had one sign everywhere: see [`redistance`].
     pub interface_nodes: usize,
-    /// Sweeps run, counting the last one that changed nothing.
+    /// Sweeps run, counting the last one that changed nothing (0 for
+    /// [`RedistanceScheme::ClosestPointTransform`], which does not sweep).
     pub sweeps: usize,
     /// Whether the last sweep changed nothing (false: `max_sweeps` was reached first).
     pub converged: bool,
@@ -157,6 +171,9 @@ pub fn redistance(phi: &mut Grid3, opts: &RedistanceOptions) -> Result<Redistanc
         for v in phi.data_mut() {
             *v = if *v < 0.0 { -far } else { far };
         }
+        (0, true)
+    } else if opts.scheme == RedistanceScheme::ClosestPointTransform {
+        transform::transform_distance(phi, &seeds, opts.band.unwrap_or(f64::INFINITY));
         (0, true)
     } else {
         sweep::sweep_distance(phi, &seeds, band_vox, opts)

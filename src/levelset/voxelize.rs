@@ -28,7 +28,6 @@ mod sign;
 
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::time::Instant;
 
 use crate::bvh::{MeshBvh, WindingNumber, WindingOptions};
@@ -125,7 +124,9 @@ impl VoxelizeReport {
 /// closed surface with several components, touching components or overlapping closed shells.
 fn is_closed(mesh: &TriMesh) -> bool {
     let nv = mesh.vertices.len();
-    let mut balance: HashMap<(u32, u32), i32> = HashMap::with_capacity(3 * mesh.faces.len() / 2);
+    // Each directed use of an edge as (lower, higher) index pair and ±1; sorted, every pair's
+    // uses must sum to 0.
+    let mut uses: Vec<(u64, i32)> = Vec::with_capacity(3 * mesh.faces.len());
     for face in &mesh.faces {
         if face.iter().any(|&i| i as usize >= nv)
             || face
@@ -136,14 +137,17 @@ fn is_closed(mesh: &TriMesh) -> bool {
         }
         for e in 0..3 {
             let (a, b) = (face[e], face[(e + 1) % 3]);
+            let key = |lo: u32, hi: u32| ((lo as u64) << 32) | hi as u64;
             match a.cmp(&b) {
-                std::cmp::Ordering::Less => *balance.entry((a, b)).or_default() += 1,
-                std::cmp::Ordering::Greater => *balance.entry((b, a)).or_default() -= 1,
+                std::cmp::Ordering::Less => uses.push((key(a, b), 1)),
+                std::cmp::Ordering::Greater => uses.push((key(b, a), -1)),
                 std::cmp::Ordering::Equal => {}
             }
         }
     }
-    balance.values().all(|&c| c == 0)
+    uses.par_sort_unstable_by_key(|&(k, _)| k);
+    uses.chunk_by(|x, y| x.0 == y.0)
+        .all(|run| run.iter().map(|&(_, s)| s).sum::<i32>() == 0)
 }
 
 /// Node state bits shared by the submodules.

@@ -319,7 +319,8 @@ impl Sweeper<'_> {
                 }
                 self.visited[r].store(stamp, Relaxed);
             }
-            RedistanceScheme::ClosestPoint => {
+            // (The transform does not sweep: never here.)
+            RedistanceScheme::ClosestPoint | RedistanceScheme::ClosestPointTransform => {
                 // A node reads only its 3 upwind face neighbours, which depend on the order: the
                 // row is worth a visit if its own row, its upwind y row or its upwind z row
                 // changed since the last visit that read them from the same side.
@@ -355,7 +356,9 @@ impl Sweeper<'_> {
         let runs = merge_runs(&mut runs[..count]);
         let (changed, out, outs) = match self.scheme {
             RedistanceScheme::Godunov => self.godunov_row(j, k, order[0], runs),
-            RedistanceScheme::ClosestPoint => self.closest_point_row(j, k, order, runs),
+            RedistanceScheme::ClosestPoint | RedistanceScheme::ClosestPointTransform => {
+                self.closest_point_row(j, k, order, runs)
+            }
         };
         let slots = &self.span[SPANS * r..SPANS * (r + 1)];
         for &(lo, hi) in &out[..outs] {

@@ -18,7 +18,7 @@ use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
 use super::{Layout, BAND};
-use crate::bvh::{closest_point_on_triangle, MeshBvh};
+use crate::bvh::{closest_point_on_triangle, MeshBvh, TrianglePoints};
 use crate::TriMesh;
 
 /// A triangle's footprint on the grid: node ranges of its grown box and its plane.
@@ -31,6 +31,10 @@ struct Footprint {
     /// Unit normal, plane offset (n·x = c) and half-width of the slab kept about the plane;
     /// `None` for a triangle without area or a sliver, which then covers its whole grown box.
     plane: Option<(Vector3<f64>, f64, f64)>,
+    /// A ball holding the triangle: centre (the mean of the corners) and radius, grown by a
+    /// billionth (of itself and of the band) so rounding never makes it too small.
+    center: Point3<f64>,
+    reach: f64,
 }
 
 /// Inclusive node range covering world coordinates [lo, hi] along an axis of `n` nodes, or
@@ -87,8 +91,21 @@ pub(super) fn band_distances(
             let slab = bw + 1e-6 * (bw + long2.sqrt());
             (n, n.dot(&a.coords), slab)
         });
+        let center = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+        let radius = [a, b, c]
+            .iter()
+            .map(|v| (*v - center).norm())
+            .fold(0.0, f64::max);
+        let reach = radius * (1.0 + 1e-9) + 1e-9 * bw;
         let id = footprints.len() as u32;
-        footprints.push(Footprint { slot, i, j, plane });
+        footprints.push(Footprint {
+            slot,
+            i,
+            j,
+            plane,
+            center,
+            reach,
+        });
         for layer in &mut layers[k[0]..=k[1]] {
             layer.push(id);
         }
@@ -106,6 +123,7 @@ pub(super) fn band_distances(
                 for &t in tris {
                     let f = &footprints[t as usize];
                     let [a, b, c] = bvh.slot_triangle(f.slot);
+                    let tri = TrianglePoints::new(a, b, c);
                     for jj in f.j[0]..=f.j[1] {
                         let y = o[1] + jj as f64 * h;
                         let Some([i0, i1]) = f.row(y, z, o[0], h, nx) else {
@@ -114,9 +132,18 @@ pub(super) fn band_distances(
                         let row = jj * nx;
                         for i in i0..=i1 {
                             let p = layout.world(i, jj, k);
-                            let (x, _) = closest_point_on_triangle(&p, a, b, c);
-                            let d2 = (p - x).norm_squared();
                             let m = &mut d2min[row + i];
+                            // The triangle lies in its ball: when the ball is farther than the
+                            // nearest triangle so far, so is the triangle (skipped: the minimum
+                            // is the same).
+                            if *m < f64::INFINITY {
+                                let r = f.reach + m.sqrt();
+                                if (p - f.center).norm_squared() > r * r {
+                                    continue;
+                                }
+                            }
+                            let (x, _) = tri.closest_point(&p);
+                            let d2 = (p - x).norm_squared();
                             if d2 < *m {
                                 *m = d2;
                             }
