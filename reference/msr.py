@@ -149,7 +149,7 @@ def rebuild_from_tangent_planes(
     normals: np.ndarray,
     details: np.ndarray,
     extension_radius: float = 1.5,
-    band_margin: float = 3.0,
+    band_margin: float = 2.0,
     k: int = 8,
     spread: float = 0.25,
     coverage: float = 0.25,

@@ -64,7 +64,7 @@ impl Default for AdvectOptions {
         AdvectOptions {
             fixed_point_iterations: 6,
             extension_radius: 1.5,
-            band_margin: 3.0,
+            band_margin: 2.0,
             departure: Departure::default(),
             coverage: 0.25,
         }
