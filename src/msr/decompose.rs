@@ -8,8 +8,9 @@
 //! ([`super::cover`]: the paper's "denser samples where needed"). For each level, φ
 //! is evolved from t_{i−1} to t_i by the chosen [`Velocity`] (threshold dynamics,
 //! [`crate::motion`]; the flow keeps φ a signed distance within its band, and φ is redistanced
-//! over the whole grid only when a sample lies near the band's edge, so the projection always
-//! sees a true distance however far the samples must travel), and X_{i−1} is projected orthogonally onto its zero
+//! farther only when a sample lies near the band's edge or beyond, as far as the farthest
+//! sample, so the projection always sees a true distance however far the samples must travel),
+//! and X_{i−1} is projected orthogonally onto its zero
 //! level set by Newton steps ([`super::project`]): X_i, W_i = X_i − X_{i−1}, and the scalar
 //! detail w_i = W_i·n_i with n_i = ∇φ(t_i)/|∇φ(t_i)| at X_i (positive outward).
 
@@ -191,14 +192,20 @@ pub fn decompose(
             last = Some(r);
         }
         let last = last.expect("at least one step per level");
-        // The flow leaves φ a signed distance within its band; beyond, the projection needs it
-        // redistanced over the whole grid (the tricubic stencil reaches 2 voxels out).
+        // The flow leaves φ a signed distance within its band; samples near its edge or beyond
+        // need it redistanced as far as they are (the tricubic stencil reaches 2 voxels out).
         let farthest = x
             .par_iter()
             .map(|p| phi.sample_trilinear(p).map_or(f64::INFINITY, f64::abs))
             .reduce(|| 0.0, f64::max);
         if farthest > band - 3.0 * h {
-            redistance(&mut phi, &RedistanceOptions::default())?;
+            redistance(
+                &mut phi,
+                &RedistanceOptions {
+                    band: Some(farthest + 3.0 * h),
+                    ..RedistanceOptions::default()
+                },
+            )?;
         }
         let projected = project_with_rescue(&phi, &x, &opts.projection)?;
         let unconverged = projected.iter().filter(|p| !p.converged).count();
