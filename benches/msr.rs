@@ -6,13 +6,15 @@
 //! same φ_0, samples X_0, time step and levels, in one run. Printed: both times, the ratio
 //! reference seconds / ours (goal ≥ 10×), and the per-level mean |w_i| of both side by side.
 //!
-//! Measured 2026-11-22 (2 cores, shared; load 0.3–1.9): grid 113×265×198, h = 0.678, 364 203
-//! samples, 2 steps of dt = 2h² per level. Ours 25.1 s (decompose 7.4 s, rebuilds 17.6 s),
-//! reference 98.2 s (decompose 24.1 s, rebuilds 74.1 s): ratio 3.9× — the 10× goal is not met,
-//! mostly because of the rebuilds (`weighted_nearest` over the band). Under load ≈ 3 ours took
-//! 47 s (ratio 2.1×). Mean |w_i| per level, ours / reference (h): 0.66/0.75, 0.65/0.72,
-//! 0.62/0.74, 0.69/0.61, 0.53/0.56 (the reference's φ is redistanced by the node-quantized
-//! `distance_transform_edt`, so its projection is noisier: 1–2 thousand samples unconverged).
+//! Measured 2026-12-02 (2 cores, shared; load 0.5–1.8): grid 113×265×198, h = 0.678, 626 762
+//! samples (the input's 364 203 snapped onto S_0, and those added where a level's surface had
+//! none within h/4; the reference adds none), 2 steps of dt = 2h² per level. Ours 20.9 s
+//! (median of 3; decompose 12.2 s, of which the flow ~5.3 s and the added samples ~2.4 s;
+//! rebuilds 8.4 s), reference 138.6 s (decompose 43.7 s, rebuilds 94.9 s): ratio 6.6× — the
+//! 10× goal is not met (2026-11-22: 3.9×, with 364 203 samples). Mean |w_i| per level, ours /
+//! reference (h): 0.65/0.73, 0.64/0.71, 0.61/0.74, 0.66/0.61, 0.51/0.56 (the reference's φ is
+//! redistanced by the node-quantized `distance_transform_edt`, so its projection is noisier:
+//! 1–2 thousand samples unconverged).
 //!
 //! Run: `cargo bench --bench msr` (the reference side needs reference/.venv, which
 //! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON).
