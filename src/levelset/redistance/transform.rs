@@ -170,6 +170,27 @@ impl Scratch {
             (&mut self.d[..n], &mut self.id[..n]),
         );
     }
+
+    /// The envelope along y of every column of an x-fastest `nx`×`ny` layer: from
+    /// (`from_d`, `from_id`) into (`to_d`, `to_id`).
+    fn envelope_along_y(
+        &mut self,
+        [nx, ny]: [usize; 2],
+        (from_d, from_id): (&[f64], &[u32]),
+        (to_d, to_id): (&mut [f64], &mut [u32]),
+    ) {
+        for i in 0..nx {
+            for j in 0..ny {
+                self.f[j] = from_d[i + nx * j];
+                self.fid[j] = from_id[i + nx * j];
+            }
+            self.envelope(ny);
+            for j in 0..ny {
+                to_d[i + nx * j] = self.d[j];
+                to_id[i + nx * j] = self.id[j];
+            }
+        }
+    }
 }
 
 /// The lower envelope of the parabolas f[q] + (p − q)² (q = 0..n, ∞ skipped) at every p:
@@ -286,17 +307,7 @@ where
                     let r = j * nx..(j + 1) * nx;
                     nearest_on_line(pos, ids, &mut tmp_d[r.clone()], &mut tmp_id[r]);
                 }
-                for i in 0..nx {
-                    for j in 0..ny {
-                        s.f[j] = tmp_d[i + nx * j];
-                        s.fid[j] = tmp_id[i + nx * j];
-                    }
-                    s.envelope(ny);
-                    for j in 0..ny {
-                        xy_d[i + nx * j] = s.d[j];
-                        xy_id[i + nx * j] = s.id[j];
-                    }
-                }
+                s.envelope_along_y([nx, ny], (tmp_d, tmp_id), (xy_d, xy_id));
                 // Class y: nearest along each column, then the envelope along x; the smaller.
                 for i in 0..nx {
                     let (pos, ids) = lines[1].line(i + nx * k);
@@ -330,17 +341,7 @@ where
                     tmp_d[r.clone()].copy_from_slice(&s.d[..nx]);
                     tmp_id[r].copy_from_slice(&s.id[..nx]);
                 }
-                for i in 0..nx {
-                    for j in 0..ny {
-                        s.f[j] = tmp_d[i + nx * j];
-                        s.fid[j] = tmp_id[i + nx * j];
-                    }
-                    s.envelope(ny);
-                    for j in 0..ny {
-                        zc_d[i + nx * j] = s.d[j];
-                        zc_id[i + nx * j] = s.id[j];
-                    }
-                }
+                s.envelope_along_y([nx, ny], (tmp_d, tmp_id), (zc_d, zc_id));
             },
         );
     // Classes x and y: the envelope along z, per y-layer of columns, in blocks of adjacent
