@@ -5,14 +5,14 @@
 //! `sample_spacing` voxels ([`super::sample`]), snapped onto the zero level set S_0 of φ_0 (the
 //! snap is kept, so the input comes back exactly). The levels are t_i = i·T/N. Before each
 //! level, the surface S_{i−1} gets new samples where it has none within `cover_radius` voxels
-//! ([`super::cover`]: the paper's "denser samples where needed"). For each level, φ
-//! is evolved from t_{i−1} to t_i by the chosen [`Velocity`] (threshold dynamics,
-//! [`crate::motion`]; the flow keeps φ a signed distance within its band, and φ is redistanced
-//! farther only when a sample lies near the band's edge or beyond, as far as the farthest
-//! sample, so the projection always sees a true distance however far the samples must travel),
-//! and X_{i−1} is projected orthogonally onto its zero
-//! level set by Newton steps ([`super::project`]): X_i, W_i = X_i − X_{i−1}, and the scalar
-//! detail w_i = W_i·n_i with n_i = ∇φ(t_i)/|∇φ(t_i)| at X_i (positive outward).
+//! ([`super::cover`]: the paper's "denser samples where needed"). For each level, φ is evolved
+//! from t_{i−1} to t_i by the chosen [`Velocity`] (threshold dynamics, [`crate::motion`]; the
+//! flow keeps φ a signed distance within its band, and φ is redistanced farther, as far as the
+//! farthest sample, only when a sample lies near the band's edge or beyond, so the projection
+//! always sees a true distance however far the samples must travel), and X_{i−1} is projected
+//! orthogonally onto its zero level set by Newton steps ([`super::project`]): X_i,
+//! W_i = X_i − X_{i−1}, and the scalar detail w_i = W_i·n_i with n_i = ∇φ(t_i)/|∇φ(t_i)| at
+//! X_i (positive outward).
 
 use super::cover::cover_gaps;
 use super::project::{project_to_zero_level, LevelProjectOptions, Projected};
