@@ -680,3 +680,39 @@ fn beside_scipy_edt_of_the_sign_mask() {
         "ours {ours_mean}h, scipy {edt_mean}h"
     );
 }
+
+#[test]
+fn keep_interface_leaves_the_crossings_and_measures_the_rest() {
+    // A sphere of radius 3 given by 0.7 × its distance: every node next to the interface keeps
+    // its (too small) value, so no crossing moves; every other node is measured as without the
+    // option.
+    let f = |p: &Point3<f64>| 0.7 * ((p - sphere_centre()).norm() - 3.0);
+    let given = cube(24, f);
+    let mut kept = given.clone();
+    let mut plain = given.clone();
+    for (g, keep) in [(&mut kept, true), (&mut plain, false)] {
+        run(
+            g,
+            &RedistanceOptions {
+                keep_interface: keep,
+                ..opts(RedistanceScheme::ClosestPoint)
+            },
+        );
+    }
+    let dims = given.dims();
+    let (mut next_to, mut beyond) = (0, 0);
+    for n in 0..given.data().len() {
+        let inside = given.data()[n] < 0.0;
+        let interface =
+            vesselmsr::grid::face_neighbours(dims, n).any(|m| (given.data()[m] < 0.0) != inside);
+        if interface {
+            next_to += 1;
+            assert_eq!(kept.data()[n], given.data()[n], "node {n}");
+            assert_ne!(plain.data()[n], given.data()[n], "node {n}");
+        } else {
+            beyond += 1;
+            assert_eq!(kept.data()[n], plain.data()[n], "node {n}");
+        }
+    }
+    assert!(next_to > 100 && beyond > 1000, "{next_to} / {beyond}");
+}

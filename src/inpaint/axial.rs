@@ -9,7 +9,7 @@
 //! of the sagitta of its axis over D. The curvature motion that follows smooths what is left.
 
 use super::region::{deepest_ball, Ball};
-use crate::grid::Grid3;
+use crate::grid::{Grid3, SubBox};
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
@@ -72,26 +72,15 @@ pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vec<Vector3<f64>>]) -
     };
     // Only nodes within the balls' bounding box can lie in D: per z-layer of that box, the
     // layer's rows within it, written in place.
-    let [lo, hi] = [0, 1].map(|side| {
-        let mut out = [0usize; 3];
-        for a in 0..3 {
-            let ext = balls.iter().map(|b| {
-                let v = if side == 0 {
-                    b.center[a] - b.radius
-                } else {
-                    b.center[a] + b.radius
-                };
-                (v - t.origin[a]) / h
-            });
-            let v = if side == 0 {
-                ext.fold(f64::INFINITY, f64::min).floor()
-            } else {
-                ext.fold(f64::NEG_INFINITY, f64::max).ceil()
-            };
-            out[a] = v.clamp(0.0, (phi.dims()[a] - 1) as f64) as usize;
-        }
-        out
+    let lo = balls.iter().fold(Point3::from([f64::INFINITY; 3]), |m, b| {
+        m.inf(&(b.center - Vector3::repeat(b.radius)))
     });
+    let hi = balls
+        .iter()
+        .fold(Point3::from([f64::NEG_INFINITY; 3]), |m, b| {
+            m.sup(&(b.center + Vector3::repeat(b.radius)))
+        });
+    let inside = SubBox::around_world(&lo, &hi, &t, phi.dims());
     let layer = nx * ny;
     let value_at = |i: usize, j: usize, k: usize| -> Option<f32> {
         let p = t.index_to_world(Vector3::new(i as f64, j as f64, k as f64));
@@ -122,11 +111,11 @@ pub fn fill_axial(phi: &mut Grid3, balls: &[Ball], axes: &[Vec<Vector3<f64>>]) -
         .data_mut()
         .par_chunks_mut(layer)
         .enumerate()
-        .filter(|(k, _)| (lo[2]..=hi[2]).contains(k))
+        .filter(|(k, _)| (inside.min[2]..inside.max[2]).contains(k))
         .map(|(k, slab)| {
             let mut count = 0;
-            for j in lo[1]..=hi[1] {
-                for i in lo[0]..=hi[0] {
+            for j in inside.min[1]..inside.max[1] {
+                for i in inside.min[0]..inside.max[0] {
                     if let Some(v) = value_at(i, j, k) {
                         slab[i + nx * j] = v;
                         count += 1;

@@ -48,7 +48,7 @@ mod init;
 mod sweep;
 mod transform;
 
-use crate::grid::Grid3;
+use crate::grid::{face_neighbours, Grid3};
 use crate::{Error, Result};
 use rayon::prelude::*;
 
@@ -87,6 +87,12 @@ pub struct RedistanceOptions {
     /// Godunov scheme: a decrease smaller than this, in voxels, does not count as a change when
     /// deciding convergence (default 1e-4). The closest-point scheme converges exactly.
     pub tolerance: f64,
+    /// Keep the given values of the nodes with a face neighbour of the other sign, so the zero
+    /// level set does not move at all: only the nodes beyond are measured (default false: every
+    /// node is measured, those next to the interface to their own patch, which in creases moves
+    /// the crossings by up to a fifth of a voxel). For a φ whose values next to the interface
+    /// are already distances.
+    pub keep_interface: bool,
 }
 
 impl Default for RedistanceOptions {
@@ -96,6 +102,7 @@ impl Default for RedistanceOptions {
             scheme: RedistanceScheme::ClosestPoint,
             max_sweeps: 64,
             tolerance: 1e-4,
+            keep_interface: false,
         }
     }
 }
@@ -164,6 +171,7 @@ pub fn redistance(phi: &mut Grid3, opts: &RedistanceOptions) -> Result<Redistanc
     let h = phi.voxel();
     // The band in voxels; the sweeps work in voxel units.
     let band_vox = opts.band.map(|b| b / h);
+    let given = opts.keep_interface.then(|| phi.clone());
     let seeds = init::interface_seeds(phi)?;
     let interface_nodes = seeds.len();
     let (sweeps, converged) = if interface_nodes == 0 {
@@ -178,9 +186,28 @@ pub fn redistance(phi: &mut Grid3, opts: &RedistanceOptions) -> Result<Redistanc
     } else {
         sweep::sweep_distance(phi, &seeds, band_vox, opts)
     };
+    if let Some(given) = given {
+        restore_interface_nodes(phi, &given);
+    }
     Ok(RedistanceReport {
         interface_nodes,
         sweeps,
         converged,
     })
+}
+
+/// Gives back to every node of `phi` that has a face neighbour of the other sign in `given` its
+/// value there.
+fn restore_interface_nodes(phi: &mut Grid3, given: &Grid3) {
+    let dims = given.dims();
+    let src = given.data();
+    phi.data_mut()
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(n, v)| {
+            let inside = src[n] < 0.0;
+            if face_neighbours(dims, n).any(|m| (src[m] < 0.0) != inside) {
+                *v = src[n];
+            }
+        });
 }

@@ -9,7 +9,7 @@
 //! sweeping. (The reconstruction by vertices needs none of this: [`super::Msr::mesh_at`].)
 
 use super::extend::{extend_to_band, reduce_nearest, ExtendFrom, NodeField};
-use crate::grid::{face_neighbours, Grid3};
+use crate::grid::Grid3;
 use crate::levelset::redistance::{redistance, RedistanceOptions};
 use crate::Result;
 use nalgebra::{Point3, Vector3, Vector4};
@@ -215,32 +215,15 @@ pub fn rebuild_from_tangent_planes(
     // beyond `near` and takes distances only near the samples. The nodes next to the zero level
     // set keep the planes' distances: the redistancer would measure them again to its own
     // patches of the interface, which in creases move the crossings by a fifth of a voxel.
-    let planes = out.clone();
     redistance(
         &mut out,
         &RedistanceOptions {
             band: Some(reach + h),
+            keep_interface: true,
             ..RedistanceOptions::default()
         },
     )?;
-    restore_interface_nodes(&mut out, &planes);
     Ok(out)
-}
-
-/// Gives back to every node of `phi` that has a face neighbour of the other sign in `before`
-/// its value there.
-fn restore_interface_nodes(phi: &mut Grid3, before: &Grid3) {
-    let dims = before.dims();
-    let src = before.data();
-    phi.data_mut()
-        .par_iter_mut()
-        .enumerate()
-        .for_each(|(n, v)| {
-            let inside = src[n] < 0.0;
-            if face_neighbours(dims, n).any(|m| (src[m] < 0.0) != inside) {
-                *v = src[n];
-            }
-        });
 }
 
 /// Trilinear interpolation of `field` at `p`, over the corners where it is defined.

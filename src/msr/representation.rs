@@ -118,7 +118,7 @@ impl Msr {
         let x = self.samples_at(i - 1);
         let mut out = LevelData::default();
         for (k, p) in x.iter().enumerate() {
-            if (self.born[k] as usize) < i {
+            if self.exists_before(k, i) {
                 out.points.push(*p);
                 out.normals.push(self.normals[i - 1][k]);
                 out.details.push(self.details[i - 1][k]);
@@ -129,10 +129,15 @@ impl Msr {
 
     /// The normal details w_i of the samples that exist at level i − 1 (1 ≤ i ≤ N).
     pub fn level_normal_details(&self, i: usize) -> Vec<f64> {
-        (self.normal_details[i - 1].iter().zip(&self.born))
-            .filter(|(_, &b)| (b as usize) < i)
-            .map(|(w, _)| *w)
+        (self.normal_details[i - 1].iter().enumerate())
+            .filter(|&(k, _)| self.exists_before(k, i))
+            .map(|(_, w)| *w)
             .collect()
+    }
+
+    /// Whether sample `k` exists at level i − 1 (it was born there or before).
+    fn exists_before(&self, k: usize, i: usize) -> bool {
+        (self.born[k] as usize) < i
     }
 }
 

@@ -23,8 +23,8 @@ use crate::TriMesh;
 
 /// A triangle's footprint on the grid: node ranges of its grown box and its plane.
 struct Footprint {
-    /// Leaf slot of the triangle in the hierarchy.
-    slot: usize,
+    /// The triangle, ready for closest-point queries.
+    tri: TrianglePoints,
     /// Inclusive node ranges along x and y.
     i: [usize; 2],
     j: [usize; 2],
@@ -99,7 +99,7 @@ pub(super) fn band_distances(
         let reach = radius * (1.0 + 1e-9) + 1e-9 * bw;
         let id = footprints.len() as u32;
         footprints.push(Footprint {
-            slot,
+            tri: TrianglePoints::new(a, b, c),
             i,
             j,
             plane,
@@ -122,8 +122,6 @@ pub(super) fn band_distances(
                 let z = o[2] + k as f64 * h;
                 for &t in tris {
                     let f = &footprints[t as usize];
-                    let [a, b, c] = bvh.slot_triangle(f.slot);
-                    let tri = TrianglePoints::new(a, b, c);
                     for jj in f.j[0]..=f.j[1] {
                         let y = o[1] + jj as f64 * h;
                         let Some([i0, i1]) = f.row(y, z, o[0], h, nx) else {
@@ -142,7 +140,7 @@ pub(super) fn band_distances(
                                     continue;
                                 }
                             }
-                            let (x, _) = tri.closest_point(&p);
+                            let (x, _) = f.tri.closest_point(&p);
                             let d2 = (p - x).norm_squared();
                             if d2 < *m {
                                 *m = d2;
