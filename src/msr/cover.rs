@@ -11,6 +11,7 @@ use super::project::{project_to_zero_level, LevelProjectOptions};
 use crate::grid::Grid3;
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::Result;
+use foldhash::fast::FixedState;
 use nalgebra::Point3;
 use std::collections::HashMap;
 
@@ -24,7 +25,7 @@ pub fn cover_gaps(
     projection: &LevelProjectOptions,
 ) -> Result<Vec<Point3<f64>>> {
     let surface = extract_surface(phi, &ExtractOptions::default())?;
-    let mut hash = PointHash::new(radius);
+    let mut hash = PointHash::new(radius, samples.len() + surface.vertices.len());
     for p in samples {
         hash.insert(*p);
     }
@@ -42,17 +43,25 @@ pub fn cover_gaps(
         .collect())
 }
 
-/// Points bucketed in cubic cells of edge `cell` (world units).
+/// Points bucketed in cubic cells of edge `cell` (world units): each occupied cell holds the
+/// head of a chain through the points it contains.
 struct PointHash {
     cell: f64,
-    buckets: HashMap<[i64; 3], Vec<Point3<f64>>>,
+    heads: HashMap<[i64; 3], u32, FixedState>,
+    points: Vec<Point3<f64>>,
+    next: Vec<u32>,
 }
 
+/// The end of a chain.
+const NONE: u32 = u32::MAX;
+
 impl PointHash {
-    fn new(cell: f64) -> Self {
+    fn new(cell: f64, capacity: usize) -> Self {
         PointHash {
             cell,
-            buckets: HashMap::new(),
+            heads: HashMap::with_capacity_and_hasher(capacity, FixedState::default()),
+            points: Vec::with_capacity(capacity),
+            next: Vec::with_capacity(capacity),
         }
     }
 
@@ -62,7 +71,9 @@ impl PointHash {
 
     fn insert(&mut self, p: Point3<f64>) {
         let k = self.key(&p);
-        self.buckets.entry(k).or_default().push(p);
+        let index = self.points.len() as u32;
+        self.points.push(p);
+        self.next.push(self.heads.insert(k, index).unwrap_or(NONE));
     }
 
     /// Whether a stored point lies within `r` ≤ `cell` of `p`.
@@ -72,9 +83,14 @@ impl PointHash {
         (-1..=1).any(|dz| {
             (-1..=1).any(|dy| {
                 (-1..=1).any(|dx| {
-                    self.buckets
-                        .get(&[x + dx, y + dy, z + dz])
-                        .is_some_and(|b| b.iter().any(|q| (q - p).norm_squared() <= r2))
+                    let mut at = self.heads.get(&[x + dx, y + dy, z + dz]).copied();
+                    while let Some(i) = at.filter(|&i| i != NONE) {
+                        if (self.points[i as usize] - p).norm_squared() <= r2 {
+                            return true;
+                        }
+                        at = Some(self.next[i as usize]);
+                    }
+                    false
                 })
             })
         })

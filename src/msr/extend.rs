@@ -4,8 +4,9 @@
 //! A node y of the band takes its foot point on the zero level set, f = y − φ(y)∇φ(y)/|∇φ(y)|²
 //! (the closest point when φ is a signed distance), and there the mean of the values of the
 //! nearest samples (see [`extend_to_band`]). So the value is constant along each normal line, as
-//! the paper's extension is. The samples are found through a k-d tree (kiddo).
+//! the paper's extension is. The samples are found through a [`SampleIndex`].
 
+use super::buckets::VoxelBuckets;
 use crate::grid::Grid3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{Point3, Vector3};
@@ -28,9 +29,13 @@ pub enum ExtendFrom {
 /// Samples each node takes its value from (the nearest ones).
 const NEAREST: usize = 8;
 
+/// Largest reach (voxels) searched through [`VoxelBuckets`]; a farther one through a k-d tree,
+/// whose cost does not grow with the distance to the nearest sample as the buckets' rings do.
+const BUCKETS_REACH: f64 = 6.0;
+
 /// Extends `values` (one per point of `points`) to every node with |φ| ≤ `band` (world units).
 /// Each node queries around its foot point or itself (`from`), finds its [`NEAREST`] samples
-/// (k-d tree) and takes the mean of their values weighted by exp(−(d² − d_min²)/2σ²), σ =
+/// ([`VoxelBuckets`]) and takes the mean of their values weighted by exp(−(d² − d_min²)/2σ²), σ =
 /// `radius`/2, so the nearest samples dominate and farther ones only smooth ties. A node whose
 /// nearest sample is farther than `band` + `radius` gets `None`. With [`ExtendFrom::FootPoint`]
 /// and samples on the zero level set, this is the paper's extension constant along normals.
@@ -95,17 +100,9 @@ pub fn reduce_nearest<T>(
 where
     T: Send,
 {
-    let none = || (0..phi.data().len()).map(|_| None).collect();
-    if points.is_empty() {
-        return none();
-    }
-    let coords: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
-    let Ok(tree) = ImmutableKdTree::<f64, 3>::new_from_slice(&coords) else {
-        return none();
+    let Some(index) = SampleIndex::new(phi, points, reach) else {
+        return (0..phi.data().len()).map(|_| None).collect();
     };
-    let reach2 = reach * reach;
-    let k = NonZero::new(NEAREST.min(points.len())).expect("k ≥ 1");
-    let near = NearSamples::new(phi, points, reach);
     (0..phi.data().len())
         .into_par_iter()
         .map(|n| {
@@ -115,30 +112,15 @@ where
             }
             let [i, j, kk] = phi.coords(n);
             let y = phi.world(i, j, kk);
-            if from == ExtendFrom::Node && !near.may_have(&y) {
-                return None;
-            }
-            let query = match from {
-                ExtendFrom::Node => y,
+            let found = match from {
+                ExtendFrom::Node => index.nearest_to_node(&y),
                 ExtendFrom::FootPoint => {
                     let (value, g) = phi.sample_tricubic_with_gradient(&y)?;
                     let g2 = g.norm_squared();
-                    if g2 > 1e-12 {
-                        y - value * g / g2
-                    } else {
-                        y
-                    }
+                    let foot = if g2 > 1e-12 { y - value * g / g2 } else { y };
+                    index.nearest(&foot)
                 }
             };
-            let found: Vec<(usize, f64)> = tree
-                .query(&[query.x, query.y, query.z])
-                .nearest_n::<SquaredEuclidean<f64>>(k)
-                .within(reach2)
-                .execute()
-                .into_iter()
-                .filter(|f| f.distance <= reach2)
-                .map(|f| (f.item as usize, f.distance))
-                .collect();
             if found.is_empty() {
                 return None;
             }
@@ -147,8 +129,78 @@ where
         .collect()
 }
 
+/// The samples of a level, indexed for the queries of the nodes of one grid: the [`NEAREST`]
+/// samples within `reach` (world units) of a point, through [`VoxelBuckets`] for a reach of up
+/// to [`BUCKETS_REACH`] voxels (the tangent planes' few voxels), else through a k-d tree
+/// (kiddo); with a coarse occupancy grid that answers "none" at once for the nodes far from
+/// every sample.
+pub struct SampleIndex {
+    search: Search,
+    near: NearSamples,
+    reach: f64,
+}
+
+enum Search {
+    Buckets(VoxelBuckets),
+    Tree(ImmutableKdTree<f64, 3>),
+}
+
+impl SampleIndex {
+    /// `None` when there are no samples.
+    pub fn new(phi: &Grid3, points: &[Point3<f64>], reach: f64) -> Option<Self> {
+        if points.is_empty() {
+            return None;
+        }
+        let search = if reach <= BUCKETS_REACH * phi.voxel() {
+            Search::Buckets(VoxelBuckets::new(phi, points))
+        } else {
+            let coords: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
+            Search::Tree(ImmutableKdTree::new_from_slice(&coords).ok()?)
+        };
+        Some(SampleIndex {
+            search,
+            near: NearSamples::new(phi, points, reach),
+            reach,
+        })
+    }
+
+    /// The nearest samples within reach of `query` (anywhere), as (index, squared distance),
+    /// nearest first.
+    pub fn nearest(&self, query: &Point3<f64>) -> Vec<(usize, f64)> {
+        match &self.search {
+            Search::Buckets(buckets) => buckets
+                .nearest(query, NEAREST, self.reach)
+                .as_slice()
+                .iter()
+                .map(|&(s, d2)| (s as usize, d2))
+                .collect(),
+            Search::Tree(tree) => {
+                let reach2 = self.reach * self.reach;
+                let k = NonZero::new(NEAREST.min(tree.size())).expect("k ≥ 1");
+                tree.query(&[query.x, query.y, query.z])
+                    .nearest_n::<SquaredEuclidean<f64>>(k)
+                    .within(reach2)
+                    .execute()
+                    .into_iter()
+                    .filter(|f| f.distance <= reach2)
+                    .map(|f| (f.item as usize, f.distance))
+                    .collect()
+            }
+        }
+    }
+
+    /// [`Self::nearest`] for a point inside the grid's box (a node), skipping the search where the
+    /// occupancy grid has no sample.
+    pub fn nearest_to_node(&self, y: &Point3<f64>) -> Vec<(usize, f64)> {
+        if !self.near.may_have(y) {
+            return Vec::new();
+        }
+        self.nearest(y)
+    }
+}
+
 /// A coarse occupancy grid of the samples (cells of edge `reach`, dilated by one cell): a point
-/// whose cell is empty has no sample within `reach`, so its k-d tree query can be skipped.
+/// whose cell is empty has no sample within `reach`, so its search can be skipped.
 struct NearSamples {
     origin: Point3<f64>,
     cell: f64,

@@ -8,6 +8,7 @@
 //! `reconstruct` the reconstruction by the level set.
 
 pub mod archive;
+pub mod buckets;
 pub mod cover;
 pub mod decompose;
 pub mod extend;

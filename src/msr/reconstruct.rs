@@ -8,7 +8,7 @@
 //! own positions on S_{i−1}, X_{i−1} = X_i − W_i, looked up around x ([`Departure`]). Nodes outside the band keep φ_i; the result is redistanced by fast
 //! sweeping. (The reconstruction by vertices needs none of this: [`super::Msr::mesh_at`].)
 
-use super::extend::{extend_to_band, reduce_nearest, ExtendFrom, NodeField};
+use super::extend::{extend_to_band, ExtendFrom, NodeField, SampleIndex};
 use crate::grid::Grid3;
 use crate::levelset::redistance::{redistance, RedistanceOptions};
 use crate::Result;
@@ -27,6 +27,10 @@ const LATERAL_REACH: f64 = 1.5;
 /// Spread σ of the weights of the tangent planes (voxels): a sample whose squared distance to
 /// the node exceeds the nearest's by σ² weighs e^(−1/2) of it.
 const PLANE_SPREAD: f64 = 0.25;
+
+/// Samples whose normal makes a larger angle than this (cosine) with the nearest sample's lie on
+/// another sheet of the surface (the far bank of a crease) and give a node no plane.
+const SAME_SHEET: f64 = 0.0;
 
 /// Options of [`advect_back`].
 #[derive(Debug, Clone, Copy)]
@@ -152,65 +156,13 @@ pub fn rebuild_from_tangent_planes(
     details: &[Vector3<f64>],
     opts: &AdvectOptions,
 ) -> Result<Grid3> {
-    let h = phi.voxel();
-    let largest = details.iter().map(|w| w.norm()).fold(0.0, f64::max);
-    let near = opts.band_margin * h;
-    let band = largest + near;
-    // Farthest a node may be from its samples and still take their planes (see below).
-    let reach = near + 2.0 * h;
-    // Each sample stands for a small disc of S_{i−1} (its tangent plane within DISC_RADIUS
-    // voxels of it): the distance to the nearest disc and the node's lateral offset from it
-    // decide below whether the planes are trusted at all.
-    let disc = DISC_RADIUS * h;
-    let softness = DISC_SOFTNESS * h;
-    let lateral_reach = LATERAL_REACH * h;
-    let two_sigma2 = 2.0 * (PLANE_SPREAD * h).powi(2);
-    let coverage = opts.coverage * h;
-    let field = reduce_nearest(phi, previous, band, reach, ExtendFrom::Node, |x, found| {
-        let d2min = found.first()?.1;
-        let d_min = d2min.sqrt();
-        let mut best = f64::INFINITY;
-        let per: Vec<(f64, f64, f64)> = found
-            .iter()
-            .map(|&(s, d2)| {
-                let along = normals[s].dot(&(x - previous[s]));
-                let lateral = (d2 - along * along).max(0.0).sqrt();
-                let to_disc = along.hypot((lateral - disc).max(0.0));
-                best = best.min(to_disc);
-                (to_disc, along, lateral)
-            })
-            .collect();
-        let (mut weight, mut lateral, mut moved) = (0.0, 0.0, 0.0);
-        let (mut plane, mut plane_weight) = (0.0, 0.0);
-        for (&(s, d2), &(to_disc, along, lat)) in found.iter().zip(&per) {
-            let w = (-(to_disc - best) / softness).exp();
-            lateral += w * lat;
-            moved += w * details[s].norm();
-            weight += w;
-            let wp = (-(d2 - d2min) / two_sigma2).exp();
-            plane += wp * along;
-            plane_weight += wp;
-        }
-        let value = plane / plane_weight;
-        let value = value
-            .abs()
-            .clamp((d_min - coverage).max(0.0), d_min)
-            .copysign(value);
-        // (plane value, distance to the nearest disc, lateral offset, how far the samples moved)
-        Some(Vector4::new(value, best, lateral / weight, moved / weight))
-    });
+    let planes = TangentPlanes::new(phi, previous, normals, details, opts);
     let mut out = phi.clone();
-    for (v, f) in out.data_mut().iter_mut().zip(&field) {
-        match f {
-            // Tangent planes only where φ_i cannot be trusted for the side — within the
-            // distance the nearby samples moved (counted up to 2h), plus a margin — and only
-            // where the nearest disc is one whose normal line passes near the node.
-            Some(f) if f.y <= near + f.w.min(2.0 * h) && f.z <= lateral_reach => *v = f.x as f32,
-            // Beyond: the side φ_i gives, at least `near` from the surface.
-            _ if (v.abs() as f64) < near => *v = (near as f32).copysign(*v),
-            _ => {}
-        }
-    }
+    let values: Vec<f32> = (0..phi.data().len())
+        .into_par_iter()
+        .map(|n| planes.node_value(phi, n))
+        .collect();
+    out.data_mut().copy_from_slice(&values);
     // A band is enough for marching cubes and for the next level's rebuild, which reads φ's sign
     // beyond `near` and takes distances only near the samples. The nodes next to the zero level
     // set keep the planes' distances: the redistancer would measure them again to its own
@@ -218,12 +170,202 @@ pub fn rebuild_from_tangent_planes(
     redistance(
         &mut out,
         &RedistanceOptions {
-            band: Some(reach + h),
+            band: Some(planes.reach + phi.voxel()),
             keep_interface: true,
             ..RedistanceOptions::default()
         },
     )?;
     Ok(out)
+}
+
+/// The samples of S_{i−1} as [`rebuild_from_tangent_planes`] reads them: what it gives each node
+/// before the redistance ([`TangentPlanes::node_value`]; public so that a node's value can be
+/// inspected where the rebuild misreads S_{i−1}).
+pub struct TangentPlanes<'a> {
+    previous: &'a [Point3<f64>],
+    normals: &'a [Vector3<f64>],
+    details: &'a [Vector3<f64>],
+    index: Option<SampleIndex>,
+    /// |φ_i| beyond which a node keeps φ_i (world units).
+    band: f64,
+    /// The largest detail among the samples within reach of each part of the grid.
+    moved: BlockMax,
+    /// Distance from the surface inside which φ_i gives only the side (world units).
+    near: f64,
+    /// Farthest a node may be from its samples and still take their planes.
+    reach: f64,
+    disc: f64,
+    softness: f64,
+    lateral_reach: f64,
+    two_sigma2: f64,
+    coverage: f64,
+    h: f64,
+}
+
+impl<'a> TangentPlanes<'a> {
+    /// The samples X_{i−1} (`previous`, with their outward normals n_{i−1} and the details W_i),
+    /// indexed for the nodes of φ_i's grid.
+    pub fn new(
+        phi: &Grid3,
+        previous: &'a [Point3<f64>],
+        normals: &'a [Vector3<f64>],
+        details: &'a [Vector3<f64>],
+        opts: &AdvectOptions,
+    ) -> Self {
+        let h = phi.voxel();
+        let largest = details.iter().map(|w| w.norm()).fold(0.0, f64::max);
+        let near = opts.band_margin * h;
+        let reach = near + 2.0 * h;
+        TangentPlanes {
+            previous,
+            normals,
+            details,
+            index: SampleIndex::new(phi, previous, reach),
+            band: largest + near,
+            moved: BlockMax::new(phi, previous, details, reach),
+            near,
+            reach,
+            // Each sample stands for a small disc of S_{i−1} (its tangent plane within
+            // DISC_RADIUS voxels of it): the distance to the nearest disc and the node's lateral
+            // offset from it decide whether the planes are trusted at all.
+            disc: DISC_RADIUS * h,
+            softness: DISC_SOFTNESS * h,
+            lateral_reach: LATERAL_REACH * h,
+            two_sigma2: 2.0 * (PLANE_SPREAD * h).powi(2),
+            coverage: opts.coverage * h,
+            h,
+        }
+    }
+
+    /// The value of node `n` of `phi` (φ_i) before the redistance: the tangent planes' distance
+    /// near the samples, else the side φ_i gives at least `near` from the surface, else φ_i.
+    pub fn node_value(&self, phi: &Grid3, n: usize) -> f32 {
+        let v = phi.data()[n];
+        if (v.abs() as f64) > self.band {
+            return v;
+        }
+        let [i, j, k] = phi.coords(n);
+        let x = phi.world(i, j, k);
+        // A node takes planes only within `near` + min(moved, 2h) of a disc, so within that
+        // plus the disc and the sample's own detail of S_i: farther, φ_i stands (|φ_i| > near).
+        let w = self.moved.at(&x);
+        if (v.abs() as f64) > self.near + self.disc + w.min(2.0 * self.h) + w + 0.1 * self.h {
+            return v;
+        }
+        match self.planes(&x) {
+            // Tangent planes only where φ_i cannot be trusted for the side — within the
+            // distance the nearby samples moved (counted up to 2h), plus a margin — and only
+            // where the nearest disc is one whose normal line passes near the node.
+            Some(f) if f.y <= self.near + f.w.min(2.0 * self.h) && f.z <= self.lateral_reach => {
+                f.x as f32
+            }
+            // Beyond: the side φ_i gives, at least `near` from the surface.
+            _ if (v.abs() as f64) < self.near => (self.near as f32).copysign(v),
+            _ => v,
+        }
+    }
+
+    /// At `x`: (plane value, distance to the nearest disc, lateral offset, how far the samples
+    /// moved); `None` with no sample within reach.
+    fn planes(&self, x: &Point3<f64>) -> Option<Vector4<f64>> {
+        let found = self.index.as_ref()?.nearest_to_node(x);
+        let d2min = found.first()?.1;
+        let d_min = d2min.sqrt();
+        let mut best = f64::INFINITY;
+        let per: Vec<(f64, f64, f64)> = found
+            .iter()
+            .map(|&(s, d2)| {
+                let along = self.normals[s].dot(&(x - self.previous[s]));
+                let lateral = (d2 - along * along).max(0.0).sqrt();
+                let to_disc = along.hypot((lateral - self.disc).max(0.0));
+                best = best.min(to_disc);
+                (to_disc, along, lateral)
+            })
+            .collect();
+        let (mut weight, mut lateral, mut moved) = (0.0, 0.0, 0.0);
+        let (mut plane, mut plane_weight) = (0.0, 0.0);
+        let sheet = self.normals[found[0].0];
+        for (&(s, d2), &(to_disc, along, lat)) in found.iter().zip(&per) {
+            let w = (-(to_disc - best) / self.softness).exp();
+            lateral += w * lat;
+            moved += w * self.details[s].norm();
+            weight += w;
+            if self.normals[s].dot(&sheet) < SAME_SHEET {
+                continue;
+            }
+            let wp = (-(d2 - d2min) / self.two_sigma2).exp();
+            plane += wp * along;
+            plane_weight += wp;
+        }
+        let value = plane / plane_weight;
+        let value = value
+            .abs()
+            .clamp((d_min - self.coverage).max(0.0), d_min)
+            .copysign(value);
+        Some(Vector4::new(value, best, lateral / weight, moved / weight))
+    }
+}
+
+/// The largest |W| of the samples in blocks of the grid, each block's value the largest within
+/// `reach` of any point of it (the blocks around it taken in).
+struct BlockMax {
+    origin: Point3<f64>,
+    block: f64,
+    dims: [usize; 3],
+    values: Vec<f64>,
+}
+
+impl BlockMax {
+    fn new(phi: &Grid3, points: &[Point3<f64>], details: &[Vector3<f64>], reach: f64) -> Self {
+        let origin = phi.world(0, 0, 0);
+        let block = 2.0 * phi.voxel();
+        let extent = phi.dims().map(|d| (d.max(1) - 1) as f64 * phi.voxel());
+        let dims = extent.map(|e| (e / block).floor() as usize + 1);
+        let key = |p: &Point3<f64>| -> [usize; 3] {
+            [0, 1, 2].map(|a| {
+                ((p[a] - origin[a]) / block)
+                    .floor()
+                    .clamp(0.0, (dims[a] - 1) as f64) as usize
+            })
+        };
+        let mut own = vec![0.0f64; dims[0] * dims[1] * dims[2]];
+        for (p, w) in points.iter().zip(details) {
+            let [x, y, z] = key(p);
+            let c = &mut own[x + dims[0] * (y + dims[1] * z)];
+            *c = c.max(w.norm());
+        }
+        // Dilate by the blocks within reach, one axis at a time.
+        let r = (reach / block).ceil() as usize;
+        let stride = [1, dims[0], dims[0] * dims[1]];
+        let mut values = own;
+        for a in 0..3 {
+            let src = values.clone();
+            for (n, v) in values.iter_mut().enumerate() {
+                let c = (n / stride[a]) % dims[a];
+                let lo = c.saturating_sub(r);
+                let hi = (c + r).min(dims[a] - 1);
+                let base = n - c * stride[a];
+                *v = (lo..=hi)
+                    .map(|t| src[base + t * stride[a]])
+                    .fold(0.0, f64::max);
+            }
+        }
+        BlockMax {
+            origin,
+            block,
+            dims,
+            values,
+        }
+    }
+
+    fn at(&self, p: &Point3<f64>) -> f64 {
+        let k = [0, 1, 2].map(|a| {
+            ((p[a] - self.origin[a]) / self.block)
+                .floor()
+                .clamp(0.0, (self.dims[a] - 1) as f64) as usize
+        });
+        self.values[k[0] + self.dims[0] * (k[1] + self.dims[1] * k[2])]
+    }
 }
 
 /// Trilinear interpolation of `field` at `p`, over the corners where it is defined.
