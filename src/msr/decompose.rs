@@ -147,7 +147,11 @@ pub fn decompose(
     let h = phi.voxel();
     let (time, dt, steps_per_level) = level_schedule(opts, h)?;
     let samples = sample_for_spacing(mesh, opts.sample_spacing * h);
-    redistance(&mut phi, &RedistanceOptions::default())?;
+    let redistance_opts = RedistanceOptions {
+        scheme: opts.flow.redistance,
+        ..RedistanceOptions::default()
+    };
+    redistance(&mut phi, &redistance_opts)?;
     let mut level_sets = Vec::new();
     if opts.keep_level_sets {
         level_sets.push(phi.clone());
@@ -203,7 +207,7 @@ pub fn decompose(
                 &mut phi,
                 &RedistanceOptions {
                     band: Some(farthest + 3.0 * h),
-                    ..RedistanceOptions::default()
+                    ..redistance_opts.clone()
                 },
             )?;
         }

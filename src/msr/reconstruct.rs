@@ -10,7 +10,7 @@
 
 use super::extend::{extend_to_band, ExtendFrom, NodeField, SampleIndex};
 use crate::grid::Grid3;
-use crate::levelset::redistance::{redistance, RedistanceOptions};
+use crate::levelset::redistance::{redistance, RedistanceOptions, RedistanceScheme};
 use crate::Result;
 use nalgebra::{Point3, Vector3, Vector4};
 use rayon::prelude::*;
@@ -129,7 +129,13 @@ pub fn advect_back(
         })
         .collect();
     out.data_mut().copy_from_slice(&values);
-    redistance(&mut out, &RedistanceOptions::default())?;
+    redistance(
+        &mut out,
+        &RedistanceOptions {
+            scheme: RedistanceScheme::ClosestPointTransform,
+            ..RedistanceOptions::default()
+        },
+    )?;
     Ok(out)
 }
 
@@ -172,6 +178,7 @@ pub fn rebuild_from_tangent_planes(
         &RedistanceOptions {
             band: Some(planes.reach + phi.voxel()),
             keep_interface: true,
+            scheme: RedistanceScheme::ClosestPointTransform,
             ..RedistanceOptions::default()
         },
     )?;
