@@ -6,15 +6,20 @@
 //! same φ_0, samples X_0, time step and levels, in one run. Printed: both times, the ratio
 //! reference seconds / ours (goal ≥ 10×), and the per-level mean |w_i| of both side by side.
 //!
-//! Measured 2026-12-02 (2 cores, shared; load 0.5–1.8): grid 113×265×198, h = 0.678, 626 762
-//! samples (the input's 364 203 snapped onto S_0, and those added where a level's surface had
-//! none within h/4; the reference adds none), 2 steps of dt = 2h² per level. Ours 20.9 s
-//! (median of 3; decompose 12.2 s, of which the flow ~5.3 s and the added samples ~2.4 s;
-//! rebuilds 8.4 s), reference 138.6 s (decompose 43.7 s, rebuilds 94.9 s): ratio 6.6× — the
-//! 10× goal is not met (2026-11-22: 3.9×, with 364 203 samples). Mean |w_i| per level, ours /
-//! reference (h): 0.65/0.73, 0.64/0.71, 0.61/0.74, 0.66/0.61, 0.51/0.56 (the reference's φ is
-//! redistanced by the node-quantized `distance_transform_edt`, so its projection is noisier:
-//! 1–2 thousand samples unconverged).
+//! The reference adds samples before each level where S_{i−1} has none within h/4 as ours does
+//! (`cover_gaps`, from libigl's marching-cubes surface; COVER = our default `cover_radius`):
+//! until 2026-12-02 it added none, so it tracked 364 203 samples against our 626 762 and was
+//! not timing the same algorithm.
+//!
+//! Measured 2026-12-03 (2 cores, shared): grid 113×265×198, h = 0.678, 2 steps of dt = 2h² per
+//! level; ours 626 761 samples (the input's 364 203 snapped onto S_0, and those added), the
+//! reference 674 745 (its φ, redistanced by the node-quantized `distance_transform_edt`, is
+//! rougher, so its surfaces get more). Ours 35.7 s (median of 3; decompose 19.8 s, rebuilds
+//! 16.5 s), reference 394.2 s (decompose 144.2 s, of which the added samples 24.0 s; rebuilds
+//! 250.0 s): **ratio 11.0×**. The same day, before the reference added samples: ours 36.3 s,
+//! reference 277.6 s, 7.6× (2026-12-02: 6.6×; 2026-11-22: 3.9×). Mean |w_i| per level, ours /
+//! reference (h): 0.65/0.72, 0.64/0.68, 0.61/0.70, 0.66/0.58, 0.51/0.53 (the reference's
+//! projection is noisier: 2–3.5 thousand samples unconverged per level, ours none).
 //!
 //! Run: `cargo bench --bench msr` (the reference side needs reference/.venv, which
 //! `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON).
@@ -108,11 +113,13 @@ fn main() {
     let phi_path = tmp.path().join("phi0.npy");
     vesselmsr::io::write_npy(&phi_path, &phi0).expect("write φ_0");
     let points = write_points(tmp.path(), &m.input_samples()).expect("write X_0");
-    // reference/msr.py PHI.npy POINTS.f64 DT STEPS LEVELS: one JSON line.
-    let (dt, steps, levels) = (
+    // reference/msr.py PHI.npy POINTS.f64 DT STEPS LEVELS COVER: one JSON line.
+    let cover = DecomposeOptions::default().cover_radius.unwrap_or(0.0);
+    let (dt, steps, levels, cover) = (
         OsString::from(m.params.dt.to_string()),
         OsString::from(steps.to_string()),
         OsString::from(LEVELS.to_string()),
+        OsString::from(cover.to_string()),
     );
     let args = [
         phi_path.as_os_str(),
@@ -120,16 +127,19 @@ fn main() {
         &dt,
         &steps,
         &levels,
+        &cover,
     ];
     let Some(theirs) = reference.with_script("msr.py").run(&args) else {
         return;
     };
     let ref_s = theirs["seconds"].as_f64().unwrap_or(f64::NAN);
     println!(
-        "reference (numpy/scipy): {:.3} s (decompose {:.3} s, rebuilds {:.3} s)",
+        "reference (numpy/scipy): {:.3} s (decompose {:.3} s, of which added samples {:.3} s; rebuilds {:.3} s); {} samples",
         ref_s,
         theirs["decompose_seconds"].as_f64().unwrap_or(f64::NAN),
-        theirs["rebuild_seconds"].as_f64().unwrap_or(f64::NAN)
+        theirs["cover_seconds"].as_f64().unwrap_or(f64::NAN),
+        theirs["rebuild_seconds"].as_f64().unwrap_or(f64::NAN),
+        theirs["samples_final"]
     );
     println!(
         "ratio reference / ours: {:.1}× (goal ≥ 10×)",

@@ -13,22 +13,29 @@ The algorithm follows Dong, Chien, Shen and Osher (level-set multiscale represen
   `scipy.ndimage.map_coordinates` (order 3); W_i = X_i − X_{i−1}, w_i = W_i·n_i with
   n_i = ∇φ_i/|∇φ_i| at X_i;
 * the input samples are first snapped onto the zero level set of φ_0 the same way;
+* before each level i, samples are added where S_{i−1} has none (`cover_gaps`, as
+  `src/msr/cover.rs`): every vertex of the marching-cubes surface of φ_{i−1} (libigl
+  `marching_cubes`) with no sample within `cover` voxels (default 0.25, vesselmsr's default
+  `cover_radius`) becomes one, greedily in vertex order (a new one covers the vertices after
+  it), Newton-projected onto S_{i−1}, those that do not converge dropped; they join X_{i−1}
+  with their normals n_{i−1} and are tracked from level i on;
 * each φ_{i−1} is then rebuilt from φ_i and (X_{i−1}, n_{i−1}, W_i): near the samples a node
   takes the Gaussian-weighted (σ = h/4, relative to the nearest) mean over its 8 nearest samples
   (`scipy.spatial.cKDTree`) of its signed distance to their tangent planes, its magnitude kept
   within [d_min − `coverage`, d_min] (d_min: the nearest sample's distance); elsewhere the side
   of φ_i (at least `band_margin` voxels from the surface); then distance_transform_edt.
-  (vesselmsr also adds samples where a level's surface has none within h/4, from its
-  marching-cubes surface; this reference does not, which only makes it cheaper.)
 
-CLI: `python msr.py PHI.npy POINTS.f64 DT STEPS LEVELS` prints one JSON line with "seconds"
-(decompose + rebuilds, no I/O), "decompose_seconds", "rebuild_seconds", "mean_abs_detail"
-(per level, world units), "samples", "unconverged" (per level).
+CLI: `python msr.py PHI.npy POINTS.f64 DT STEPS LEVELS [COVER]` (COVER in voxels, 0: no added
+samples) prints one JSON line with "seconds" (decompose + rebuilds, no I/O),
+"decompose_seconds", "cover_seconds" (the added samples, within decompose), "rebuild_seconds",
+"mean_abs_detail" (per level, world units), "samples" (the input's), "samples_final" (with the
+added ones), "unconverged" (per level).
 """
 
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -109,15 +116,64 @@ def redistance(phi: np.ndarray, voxel: float) -> np.ndarray:
     return oracle.edt(phi < 0, voxel)["values"]
 
 
-def decompose(phi0: np.ndarray, origin, voxel: float, samples: np.ndarray, dt: float, steps: int, levels: int) -> dict:
+def cover_gaps(phi: np.ndarray, origin, voxel: float, interp: Interpolant, samples: np.ndarray, radius: float) -> np.ndarray:
+    """New samples on the zero level set of `phi` (indexed [k, j, i]) so that every vertex of
+    its marching-cubes surface has a sample within `radius` (world units): see the module doc."""
+    from scipy.spatial import cKDTree
+
+    nz, ny, nx = phi.shape
+    V = oracle.marching_cubes(phi.ravel(), (nx, ny, nz), tuple(np.asarray(origin, np.float64)), voxel)["V"]
+    if len(V) == 0:
+        return np.zeros((0, 3))
+    if len(samples):
+        d, _ = cKDTree(samples).query(V, k=1, distance_upper_bound=radius * (1 + 1e-12))
+        open_ = V[~(d <= radius)]
+    else:
+        open_ = V
+    # Greedy in vertex order: a vertex is kept unless a kept one lies within the radius
+    # (cells of edge `radius`: the kept ones near a vertex are in its 27 cells).
+    cells: dict[tuple[int, int, int], list[tuple[float, float, float]]] = {}
+    r2 = radius * radius
+    kept = []
+    keys = np.floor(open_ / radius).astype(np.int64).tolist()
+    for (cx, cy, cz), (x, y, z) in zip(keys, open_.tolist()):
+        near = any(
+            (qx - x) ** 2 + (qy - y) ** 2 + (qz - z) ** 2 <= r2
+            for dz in (-1, 0, 1)
+            for dy in (-1, 0, 1)
+            for dx in (-1, 0, 1)
+            for (qx, qy, qz) in cells.get((cx + dx, cy + dy, cz + dz), ())
+        )
+        if not near:
+            cells.setdefault((cx, cy, cz), []).append((x, y, z))
+            kept.append((x, y, z))
+    if not kept:
+        return np.zeros((0, 3))
+    x, _ = project(interp, np.asarray(kept))
+    converged = np.abs(interp.value(x)) <= 1e-3 * voxel
+    return x[converged]
+
+
+def decompose(
+    phi0: np.ndarray, origin, voxel: float, samples: np.ndarray, dt: float, steps: int, levels: int, cover: float = 0.25
+) -> dict:
     """Levels 1..N: the level sets φ_0..φ_N, samples X_0..X_N, normals n_0..n_N, details W_i
-    and the mean |w_i| per level."""
+    and the mean |w_i| per level. X_{i−1}, n_{i−1} and W_i include the samples added before
+    level i (`cover` voxels, 0: none), so each holds more samples than the one before."""
     phi = redistance(phi0, voxel)
     interp = Interpolant(phi, origin, voxel)
     samples, _ = project(interp, samples)
     phis, xs, normals, details, mean_abs, unconverged = [phi], [samples], [unit_normals(interp, samples)], [], [], []
     x = samples
+    cover_seconds = 0.0
     for _ in range(levels):
+        if cover > 0:
+            t0 = time.perf_counter()
+            new = cover_gaps(phi, origin, voxel, interp, x, cover * voxel)
+            x = np.concatenate([x, new])
+            xs[-1] = x
+            normals[-1] = np.concatenate([normals[-1], unit_normals(interp, new)])
+            cover_seconds += time.perf_counter() - t0
         for _ in range(steps):
             phi = oracle.mbo_step(phi, voxel, dt, "vpmcf")["values"]
         interp = Interpolant(phi, origin, voxel)
@@ -138,6 +194,7 @@ def decompose(phi0: np.ndarray, origin, voxel: float, samples: np.ndarray, dt: f
         "details": details,
         "mean_abs_detail": mean_abs,
         "unconverged": unconverged,
+        "cover_seconds": cover_seconds,
     }
 
 
@@ -190,11 +247,11 @@ def rebuild_from_tangent_planes(
     return redistance(out, voxel)
 
 
-def run(phi0: np.ndarray, side: dict, samples: np.ndarray, dt: float, steps: int, levels: int) -> dict:
+def run(phi0: np.ndarray, side: dict, samples: np.ndarray, dt: float, steps: int, levels: int, cover: float = 0.25) -> dict:
     voxel = float(side["voxel"])
     origin = np.asarray(side["origin"], np.float64)
     t0 = time.perf_counter()
-    d = decompose(phi0, origin, voxel, samples, dt, steps, levels)
+    d = decompose(phi0, origin, voxel, samples, dt, steps, levels, cover)
     t1 = time.perf_counter()
     rebuilt = [
         rebuild_from_tangent_planes(d["phis"][i], origin, voxel, d["samples"][i - 1], d["normals"][i - 1], d["details"][i - 1])
@@ -208,26 +265,31 @@ def run(phi0: np.ndarray, side: dict, samples: np.ndarray, dt: float, steps: int
     return {
         "seconds": t2 - t0,
         "decompose_seconds": t1 - t0,
+        "cover_seconds": d["cover_seconds"],
         "rebuild_seconds": t2 - t1,
         "mean_abs_detail": d["mean_abs_detail"],
         "unconverged": d["unconverged"],
         "rebuild_mean_abs_error_h": agree,
         "samples": int(len(samples)),
+        "samples_final": int(len(d["samples"][-1])),
     }
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if len(argv) != 5:
-        print("usage: msr.py PHI.npy POINTS.f64 DT STEPS LEVELS", file=sys.stderr)
+    if len(argv) not in (5, 6):
+        print("usage: msr.py PHI.npy POINTS.f64 DT STEPS LEVELS [COVER]", file=sys.stderr)
         return 1
     try:
         phi, side = oracle.read_npy_grid(argv[0])
         pts = oracle.read_points(argv[1])
         dt, steps, levels = float(argv[2]), int(argv[3]), int(argv[4])
+        cover = float(argv[5]) if len(argv) == 6 else 0.25
         if steps < 1 or levels < 1:
             raise oracle.OracleError("STEPS and LEVELS must be at least 1")
-        res = run(phi.astype(np.float64), side, pts, dt, steps, levels)
+        if not (math.isfinite(cover) and cover >= 0):
+            raise oracle.OracleError(f"COVER must be a non-negative number of voxels, got {cover}")
+        res = run(phi.astype(np.float64), side, pts, dt, steps, levels, cover)
     except (oracle.OracleError, ValueError) as e:
         print(f"msr: error: {e}", file=sys.stderr)
         return 1
