@@ -12,10 +12,14 @@
 //! always sees a true distance however far the samples must travel), and X_{i−1} is projected
 //! orthogonally onto its zero level set by Newton steps ([`super::project`]): X_i,
 //! W_i = X_i − X_{i−1}, and the scalar detail w_i = W_i·n_i with n_i = ∇φ(t_i)/|∇φ(t_i)| at
-//! X_i (positive outward).
+//! X_i (positive outward). Then, where the level-set rebuild of φ_{i−1} from φ_i and these
+//! samples would misread a node near S_{i−1}, a sample is added at that node's foot point on
+//! S_{i−1} ([`super::misread`], `misread_rounds` rounds).
 
 use super::cover::cover_gaps;
+use super::misread::misread_points;
 use super::project::{project_to_zero_level, LevelProjectOptions, Projected};
+use super::reconstruct::AdvectOptions;
 use super::rescue::rescue_unconverged;
 use super::sample::sample_for_spacing;
 use super::{Msr, MsrParams};
@@ -46,6 +50,11 @@ pub struct DecomposeOptions {
     /// Before each level, every point of S_{i−1} (the vertices of its marching-cubes surface)
     /// with no sample within this distance (voxels) gets one; `None`: no new samples.
     pub cover_radius: Option<f64>,
+    /// After each level, rounds of samples added on S_{i−1} at the nodes near it that the
+    /// level-set rebuild (`rebuild_from_tangent_planes` with `AdvectOptions::default()`) would
+    /// misread ([`super::misread`]; the second and later rounds check only around the samples
+    /// the round before added); 0: none.
+    pub misread_rounds: usize,
     /// Newton projection onto each level set.
     pub projection: LevelProjectOptions,
     /// The flow's own options.
@@ -64,6 +73,7 @@ impl Default for DecomposeOptions {
             dt: None,
             sample_spacing: 1.0,
             cover_radius: Some(0.25),
+            misread_rounds: 2,
             projection: LevelProjectOptions::default(),
             flow: FlowOptions::default(),
             keep_level_sets: false,
@@ -172,23 +182,16 @@ pub fn decompose(
     for level in 1..=opts.levels {
         if let Some(radius) = opts.cover_radius {
             let new = cover_gaps(&phi, &x, radius * h, &opts.projection)?;
-            let total = x.len() + new.len();
-            normals
-                .last_mut()
-                .expect("n_0 is set")
-                .extend(outward_normals(&phi, &new));
-            for n in normals.iter_mut().rev().skip(1) {
-                n.resize(total, Vector3::zeros());
-            }
-            for w in &mut details {
-                w.resize(total, Vector3::zeros());
-            }
-            for w in &mut normal_details {
-                w.resize(total, 0.0);
-            }
-            born.resize(total, (level - 1) as u32);
-            x.extend(new);
+            let mut tracks = Tracks {
+                x: &mut x,
+                normals: &mut normals,
+                details: &mut details,
+                normal_details: &mut normal_details,
+                born: &mut born,
+            };
+            tracks.append(&phi, new, level - 1);
         }
+        let previous_phi = (opts.misread_rounds > 0).then(|| phi.clone());
         let mut last = None;
         for _ in 0..steps_per_level {
             let r = flow.step(&mut phi)?;
@@ -212,9 +215,40 @@ pub fn decompose(
             )?;
         }
         let projected = project_with_rescue(&phi, &x, &opts.projection)?;
-        let unconverged = projected.iter().filter(|p| !p.converged).count();
-        let next: Vec<Point3<f64>> = projected.iter().map(|p| p.point).collect();
-        let w: Vec<Vector3<f64>> = next.iter().zip(&x).map(|(a, b)| a - b).collect();
+        let mut unconverged = projected.iter().filter(|p| !p.converged).count();
+        let mut next: Vec<Point3<f64>> = projected.iter().map(|p| p.point).collect();
+        let mut w: Vec<Vector3<f64>> = next.iter().zip(&x).map(|(a, b)| a - b).collect();
+        if let Some(previous_phi) = &previous_phi {
+            let mut around: Option<Vec<Point3<f64>>> = None;
+            for _ in 0..opts.misread_rounds {
+                let new = misread_points(
+                    previous_phi,
+                    &phi,
+                    &x,
+                    normals.last().expect("n_{i-1} is set"),
+                    &w,
+                    around.as_deref(),
+                    &AdvectOptions::default(),
+                    &opts.projection,
+                );
+                if new.is_empty() {
+                    break;
+                }
+                let arrived = project_with_rescue(&phi, &new, &opts.projection)?;
+                unconverged += arrived.iter().filter(|p| !p.converged).count();
+                w.extend(arrived.iter().zip(&new).map(|(a, b)| a.point - b));
+                next.extend(arrived.iter().map(|p| p.point));
+                let mut tracks = Tracks {
+                    x: &mut x,
+                    normals: &mut normals,
+                    details: &mut details,
+                    normal_details: &mut normal_details,
+                    born: &mut born,
+                };
+                tracks.append(previous_phi, new.clone(), level - 1);
+                around = Some(new);
+            }
+        }
         let n_i = outward_normals(&phi, &next);
         let wn: Vec<f64> = n_i.iter().zip(&w).map(|(n, d)| d.dot(n)).collect();
         normals.push(n_i);
@@ -269,6 +303,39 @@ pub fn decompose(
         reports,
         level_sets,
     })
+}
+
+/// The samples' bookkeeping while the levels are built: X_{i−1}, the normals n_0..n_{i−1}, the
+/// details of the levels done and each sample's birth level.
+struct Tracks<'a> {
+    x: &'a mut Vec<Point3<f64>>,
+    normals: &'a mut Vec<Vec<Vector3<f64>>>,
+    details: &'a mut Vec<Vec<Vector3<f64>>>,
+    normal_details: &'a mut Vec<Vec<f64>>,
+    born: &'a mut Vec<u32>,
+}
+
+impl Tracks<'_> {
+    /// Adds `new` samples of S_{born} (on the zero level set of `phi`, φ_{born}): their normals
+    /// at that level from `phi`, zero normals and details before it.
+    fn append(&mut self, phi: &Grid3, new: Vec<Point3<f64>>, born: usize) {
+        let total = self.x.len() + new.len();
+        self.normals
+            .last_mut()
+            .expect("n_0 is set")
+            .extend(outward_normals(phi, &new));
+        for n in self.normals.iter_mut().rev().skip(1) {
+            n.resize(total, Vector3::zeros());
+        }
+        for w in self.details.iter_mut() {
+            w.resize(total, Vector3::zeros());
+        }
+        for w in self.normal_details.iter_mut() {
+            w.resize(total, 0.0);
+        }
+        self.born.resize(total, born as u32);
+        self.x.extend(new);
+    }
 }
 
 /// The Newton projections of `points` onto the zero level set of `phi`, those that stall

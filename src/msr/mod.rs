@@ -3,7 +3,8 @@
 //! sample points of the surface are followed across the scales of a curvature motion, and the
 //! displacements W_i between consecutive scales are the details; MSR = {W_1..W_N, φ_T}.
 //! `representation` holds the data, `archive` its `.npz` file, `sample` the sample points X_0,
-//! `cover` the samples added where a level's surface has none near, `project` the Newton
+//! `cover` the samples added where a level's surface has none near, `misread` those added where
+//! the level-set reconstruction would misread a level, `project` the Newton
 //! projection onto a zero level set (`rescue` for the points where it stalls), `extend` and
 //! `reconstruct` the reconstruction by the level set.
 
@@ -12,6 +13,7 @@ pub mod buckets;
 pub mod cover;
 pub mod decompose;
 pub mod extend;
+pub mod misread;
 pub mod project;
 pub mod reconstruct;
 pub mod representation;
