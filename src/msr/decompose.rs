@@ -168,27 +168,23 @@ pub fn decompose(
     }
     let mut flow = Flow::new(opts.velocity, dt, opts.flow.clone())?;
     let band = opts.flow.band_width(&opts.velocity, dt, h);
-    let mut x: Vec<Point3<f64>> = project_with_rescue(&phi, &samples.points, &opts.projection)?
+    let x: Vec<Point3<f64>> = project_with_rescue(&phi, &samples.points, &opts.projection)?
         .iter()
         .map(|p| p.point)
         .collect();
     let snap: Vec<Vector3<f64>> = x.iter().zip(&samples.points).map(|(a, b)| a - b).collect();
-    let mut born = vec![0u32; x.len()];
-    let mut normals = vec![outward_normals(&phi, &x)];
-    let mut details: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(opts.levels);
-    let mut normal_details: Vec<Vec<f64>> = Vec::with_capacity(opts.levels);
+    let mut tracks = Tracks {
+        born: vec![0u32; x.len()],
+        normals: vec![outward_normals(&phi, &x)],
+        x,
+        details: Vec::with_capacity(opts.levels),
+        normal_details: Vec::with_capacity(opts.levels),
+    };
     let mut reports = Vec::with_capacity(opts.levels);
     let mut times = vec![0.0];
     for level in 1..=opts.levels {
         if let Some(radius) = opts.cover_radius {
-            let new = cover_gaps(&phi, &x, radius * h, &opts.projection)?;
-            let mut tracks = Tracks {
-                x: &mut x,
-                normals: &mut normals,
-                details: &mut details,
-                normal_details: &mut normal_details,
-                born: &mut born,
-            };
+            let new = cover_gaps(&phi, &tracks.x, radius * h, &opts.projection)?;
             tracks.append(&phi, new, level - 1);
         }
         let previous_phi = (opts.misread_rounds > 0).then(|| phi.clone());
@@ -201,7 +197,8 @@ pub fn decompose(
         let last = last.expect("at least one step per level");
         // The flow leaves φ a signed distance within its band; samples near its edge or beyond
         // need it redistanced as far as they are (the tricubic stencil reaches 2 voxels out).
-        let farthest = x
+        let farthest = tracks
+            .x
             .par_iter()
             .map(|p| phi.sample_trilinear(p).map_or(f64::INFINITY, f64::abs))
             .reduce(|| 0.0, f64::max);
@@ -214,18 +211,18 @@ pub fn decompose(
                 },
             )?;
         }
-        let projected = project_with_rescue(&phi, &x, &opts.projection)?;
+        let projected = project_with_rescue(&phi, &tracks.x, &opts.projection)?;
         let mut unconverged = projected.iter().filter(|p| !p.converged).count();
         let mut next: Vec<Point3<f64>> = projected.iter().map(|p| p.point).collect();
-        let mut w: Vec<Vector3<f64>> = next.iter().zip(&x).map(|(a, b)| a - b).collect();
+        let mut w: Vec<Vector3<f64>> = next.iter().zip(&tracks.x).map(|(a, b)| a - b).collect();
         if let Some(previous_phi) = &previous_phi {
             let mut around: Option<Vec<Point3<f64>>> = None;
             for _ in 0..opts.misread_rounds {
                 let new = misread_points(
                     previous_phi,
                     &phi,
-                    &x,
-                    normals.last().expect("n_{i-1} is set"),
+                    &tracks.x,
+                    tracks.normals.last().expect("n_{i-1} is set"),
                     &w,
                     around.as_deref(),
                     &AdvectOptions::default(),
@@ -238,27 +235,20 @@ pub fn decompose(
                 unconverged += arrived.iter().filter(|p| !p.converged).count();
                 w.extend(arrived.iter().zip(&new).map(|(a, b)| a.point - b));
                 next.extend(arrived.iter().map(|p| p.point));
-                let mut tracks = Tracks {
-                    x: &mut x,
-                    normals: &mut normals,
-                    details: &mut details,
-                    normal_details: &mut normal_details,
-                    born: &mut born,
-                };
                 tracks.append(previous_phi, new.clone(), level - 1);
                 around = Some(new);
             }
         }
         let n_i = outward_normals(&phi, &next);
         let wn: Vec<f64> = n_i.iter().zip(&w).map(|(n, d)| d.dot(n)).collect();
-        normals.push(n_i);
+        tracks.normals.push(n_i);
         let mean_abs = wn.iter().map(|v| v.abs()).sum::<f64>() / wn.len().max(1) as f64;
         let sparse =
             wn.iter().filter(|v| v.abs() < 0.1 * h).count() as f64 / wn.len().max(1) as f64;
         reports.push(LevelReport {
             level,
             time: last.time,
-            samples: x.len(),
+            samples: tracks.x.len(),
             mean_abs_detail: mean_abs,
             sparse_fraction: sparse,
             unconverged,
@@ -267,9 +257,9 @@ pub fn decompose(
             mean_abs_curvature: mean_abs_curvature(&phi, &next),
         });
         times.push(level as f64 * time / opts.levels as f64);
-        details.push(w);
-        normal_details.push(wn);
-        x = next;
+        tracks.details.push(w);
+        tracks.normal_details.push(wn);
+        tracks.x = next;
         if opts.keep_level_sets {
             level_sets.push(phi.clone());
         }
@@ -280,11 +270,11 @@ pub fn decompose(
         extra_face: samples.extra_face,
         extra_bary: samples.extra_bary,
         snap,
-        born,
-        samples: x,
-        details,
-        normal_details,
-        normals,
+        born: tracks.born,
+        samples: tracks.x,
+        details: tracks.details,
+        normal_details: tracks.normal_details,
+        normals: tracks.normals,
         times,
         phi,
         params: MsrParams {
@@ -307,15 +297,15 @@ pub fn decompose(
 
 /// The samples' bookkeeping while the levels are built: X_{i−1}, the normals n_0..n_{i−1}, the
 /// details of the levels done and each sample's birth level.
-struct Tracks<'a> {
-    x: &'a mut Vec<Point3<f64>>,
-    normals: &'a mut Vec<Vec<Vector3<f64>>>,
-    details: &'a mut Vec<Vec<Vector3<f64>>>,
-    normal_details: &'a mut Vec<Vec<f64>>,
-    born: &'a mut Vec<u32>,
+struct Tracks {
+    x: Vec<Point3<f64>>,
+    normals: Vec<Vec<Vector3<f64>>>,
+    details: Vec<Vec<Vector3<f64>>>,
+    normal_details: Vec<Vec<f64>>,
+    born: Vec<u32>,
 }
 
-impl Tracks<'_> {
+impl Tracks {
     /// Adds `new` samples of S_{born} (on the zero level set of `phi`, φ_{born}): their normals
     /// at that level from `phi`, zero normals and details before it.
     fn append(&mut self, phi: &Grid3, new: Vec<Point3<f64>>, born: usize) {
