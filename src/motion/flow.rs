@@ -13,7 +13,8 @@
 //! first order (a sphere's zero crossing moves from R to r with r + 2Δt/r = R exactly, for
 //! √(2Δt) ≪ R). φ̃ carries the interface at sub-voxel precision, so thresholding it at 0 (the
 //! equivalent of χ̄ > ½) is the "sub-voxel indicator" the issue asks for, and the redistancer
-//! (`levelset::redistance`, fast sweeping seeded from sub-voxel patches of the interface)
+//! (`levelset::redistance`, distances to sub-voxel patches of the interface: by default the
+//! closest-point transform, [`FlowOptions::redistance`])
 //! rebuilds φ without moving its zero level set: nothing pins, whatever Δt/h².
 //!
 //! **The four velocities** ([`Velocity`]):

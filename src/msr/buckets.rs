@@ -10,6 +10,7 @@
 
 use crate::grid::Grid3;
 use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
 
 /// Most neighbours [`VoxelBuckets::nearest`] returns.
 pub const MAX_NEAREST: usize = 8;
@@ -89,20 +90,18 @@ impl VoxelBuckets {
         let h = grid.voxel();
         let cells = grid.dims().map(|d| d.max(2) - 1);
         let total = cells[0] * cells[1] * cells[2];
-        let mut cell_of = Vec::with_capacity(points.len());
+        let cell_of: Vec<u32> = points
+            .par_iter()
+            .map(|p| cell_index(&origin, h, cells, p).map_or(u32::MAX, |c| c as u32))
+            .collect();
         let mut counts = vec![0u32; total + 1];
         let (mut outside, mut points_outside) = (Vec::new(), Vec::new());
-        for (s, p) in points.iter().enumerate() {
-            match cell_index(&origin, h, cells, p) {
-                Some(c) => {
-                    counts[c + 1] += 1;
-                    cell_of.push(c as u32);
-                }
-                None => {
-                    outside.push(s as u32);
-                    points_outside.push(*p);
-                    cell_of.push(u32::MAX);
-                }
+        for (s, (&c, p)) in cell_of.iter().zip(points).enumerate() {
+            if c == u32::MAX {
+                outside.push(s as u32);
+                points_outside.push(*p);
+            } else {
+                counts[c as usize + 1] += 1;
             }
         }
         for c in 0..total {

@@ -35,7 +35,7 @@ const BUCKETS_REACH: f64 = 6.0;
 
 /// Extends `values` (one per point of `points`) to every node with |φ| ≤ `band` (world units).
 /// Each node queries around its foot point or itself (`from`), finds its [`NEAREST`] samples
-/// ([`VoxelBuckets`]) and takes the mean of their values weighted by exp(−(d² − d_min²)/2σ²), σ =
+/// ([`SampleIndex`]) and takes the mean of their values weighted by exp(−(d² − d_min²)/2σ²), σ =
 /// `radius`/2, so the nearest samples dominate and farther ones only smooth ties. A node whose
 /// nearest sample is farther than `band` + `radius` gets `None`. With [`ExtendFrom::FootPoint`]
 /// and samples on the zero level set, this is the paper's extension constant along normals.
@@ -227,14 +227,20 @@ impl NearSamples {
             Some(k)
         };
         for p in points {
-            let Some([x, y, z]) = key(p) else { continue };
-            for dz in z.saturating_sub(1)..=(z + 1).min(dims[2] - 1) {
-                for dy in y.saturating_sub(1)..=(y + 1).min(dims[1] - 1) {
-                    for dx in x.saturating_sub(1)..=(x + 1).min(dims[0] - 1) {
-                        occupied[dx + dims[0] * (dy + dims[1] * dz)] = true;
-                    }
-                }
+            if let Some([x, y, z]) = key(p) {
+                occupied[x + dims[0] * (y + dims[1] * z)] = true;
             }
+        }
+        // Dilated by one cell (the 26 neighbours), one axis at a time.
+        let stride = [1, dims[0], dims[0] * dims[1]];
+        for a in 0..3 {
+            let src = occupied.clone();
+            occupied.par_iter_mut().enumerate().for_each(|(n, v)| {
+                let c = (n / stride[a]) % dims[a];
+                *v = src[n]
+                    || (c > 0 && src[n - stride[a]])
+                    || (c + 1 < dims[a] && src[n + stride[a]]);
+            });
         }
         NearSamples {
             origin,

@@ -5,8 +5,10 @@
 //! from y = x + W(x) on S_i, so φ_{i−1}(x) = φ_i(y). W at a node comes either from W_i extended
 //! around S_i constant along normals ([`super::extend`]), y then found by fixed-point iteration
 //! of y = x + W̃(y) from y₀ = x + W̃(x) (the paper's way), or, by default, from the samples'
-//! own positions on S_{i−1}, X_{i−1} = X_i − W_i, looked up around x ([`Departure`]). Nodes outside the band keep φ_i; the result is redistanced by fast
-//! sweeping. (The reconstruction by vertices needs none of this: [`super::Msr::mesh_at`].)
+//! own positions on S_{i−1}, X_{i−1} = X_i − W_i, looked up around x ([`Departure`]). Nodes
+//! outside the band keep φ_i; the result is redistanced (closest-point transform,
+//! [`RedistanceScheme::ClosestPointTransform`]). (The reconstruction by vertices needs none of
+//! this: [`super::Msr::mesh_at`].)
 
 use super::extend::{extend_to_band, ExtendFrom, NodeField, SampleIndex};
 use crate::grid::Grid3;
@@ -147,7 +149,8 @@ pub fn advect_back(
 /// distance to the sample (Gaussian, σ = a quarter voxel beyond the nearest), so each node
 /// follows its own sheet where two sheets of S_{i−1} lie close, as the banks of a narrow sulcus
 /// do; elsewhere the side comes from φ_i, at least `band_margin` voxels from the surface; then
-/// fast sweeping.
+/// the redistance (closest-point transform) of a band, the nodes next to the zero level set
+/// keeping the planes' values.
 ///
 /// The value is kept within what the samples allow: no farther from S_{i−1} than the nearest
 /// sample, d_min, and no nearer than d_min − `coverage` (every point of S_{i−1} has a sample
