@@ -132,17 +132,16 @@ where
 /// The samples of a level, indexed for the queries of the nodes of one grid: the [`NEAREST`]
 /// samples within `reach` (world units) of a point, through [`VoxelBuckets`] for a reach of up
 /// to [`BUCKETS_REACH`] voxels (the tangent planes' few voxels), else through a k-d tree
-/// (kiddo); with a coarse occupancy grid that answers "none" at once for the nodes far from
-/// every sample.
+/// (kiddo) with a coarse occupancy grid that answers "none" at once for the nodes far from
+/// every sample (the buckets' block distances do that themselves).
 pub struct SampleIndex {
     search: Search,
-    near: NearSamples,
     reach: f64,
 }
 
 enum Search {
     Buckets(VoxelBuckets),
-    Tree(ImmutableKdTree<f64, 3>),
+    Tree(ImmutableKdTree<f64, 3>, NearSamples),
 }
 
 impl SampleIndex {
@@ -155,13 +154,12 @@ impl SampleIndex {
             Search::Buckets(VoxelBuckets::new(phi, points))
         } else {
             let coords: Vec<[f64; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
-            Search::Tree(ImmutableKdTree::new_from_slice(&coords).ok()?)
+            Search::Tree(
+                ImmutableKdTree::new_from_slice(&coords).ok()?,
+                NearSamples::new(phi, points, reach),
+            )
         };
-        Some(SampleIndex {
-            search,
-            near: NearSamples::new(phi, points, reach),
-            reach,
-        })
+        Some(SampleIndex { search, reach })
     }
 
     /// The nearest samples within reach of `query` (anywhere), as (index, squared distance),
@@ -174,7 +172,7 @@ impl SampleIndex {
                 .iter()
                 .map(|&(s, d2)| (s as usize, d2))
                 .collect(),
-            Search::Tree(tree) => {
+            Search::Tree(tree, _) => {
                 let reach2 = self.reach * self.reach;
                 let k = NonZero::new(NEAREST.min(tree.size())).expect("k ≥ 1");
                 tree.query(&[query.x, query.y, query.z])
@@ -189,13 +187,13 @@ impl SampleIndex {
         }
     }
 
-    /// [`Self::nearest`] for a point inside the grid's box (a node), skipping the search where the
-    /// occupancy grid has no sample.
+    /// [`Self::nearest`] for a point inside the grid's box (a node), skipping the tree's search
+    /// where its occupancy grid has no sample.
     pub fn nearest_to_node(&self, y: &Point3<f64>) -> Vec<(usize, f64)> {
-        if !self.near.may_have(y) {
-            return Vec::new();
+        match &self.search {
+            Search::Tree(_, near) if !near.may_have(y) => Vec::new(),
+            _ => self.nearest(y),
         }
-        self.nearest(y)
     }
 }
 

@@ -8,7 +8,7 @@
 //! a distance off by a third of a voxel; a sample at that node's foot point on S_{i−1} (its
 //! Newton projection) gives the rebuild the plane it lacked.
 
-use super::project::{project_to_zero_level, LevelProjectOptions};
+use super::project::{converged_projections, LevelProjectOptions};
 use super::reconstruct::{AdvectOptions, TangentPlanes};
 use crate::grid::Grid3;
 use nalgebra::{Point3, Vector3};
@@ -65,11 +65,7 @@ pub fn misread_points(
             candidates.into_par_iter().filter_map(check).collect()
         }
     };
-    project_to_zero_level(previous_phi, &nodes, projection)
-        .into_iter()
-        .filter(|p| p.converged)
-        .map(|p| p.point)
-        .collect()
+    converged_projections(previous_phi, &nodes, projection)
 }
 
 /// The nodes of `phi` within `reach` nodes (along each axis) of the node nearest each point.
