@@ -25,6 +25,7 @@ use super::sample::sample_for_spacing;
 use super::{Msr, MsrParams};
 use crate::grid::Grid3;
 use crate::levelset::redistance::{redistance, RedistanceOptions};
+use crate::levelset::speck::{clear_specks, SPECK};
 use crate::motion::evolve::step_count;
 use crate::motion::flow::{Flow, FlowOptions, StepReport, MIN_DT_VOXELS2};
 use crate::motion::velocity::Velocity;
@@ -52,8 +53,8 @@ pub struct DecomposeOptions {
     pub cover_radius: Option<f64>,
     /// After each level, rounds of samples added on S_{i−1} at the nodes near it that the
     /// level-set rebuild (`rebuild_from_tangent_planes` with `AdvectOptions::default()`) would
-    /// misread ([`super::misread`]; the second and later rounds check only around the samples
-    /// the round before added); 0: none.
+    /// misread ([`super::misread`]: a node's value, or a grid face's decider; the second and
+    /// later rounds check only around the nodes found before); 0: none.
     pub misread_rounds: usize,
     /// Newton projection onto each level set.
     pub projection: LevelProjectOptions,
@@ -162,6 +163,7 @@ pub fn decompose(
         ..RedistanceOptions::default()
     };
     redistance(&mut phi, &redistance_opts)?;
+    clear_specks(&mut phi, SPECK);
     let mut level_sets = Vec::new();
     if opts.keep_level_sets {
         level_sets.push(phi.clone());
@@ -195,6 +197,8 @@ pub fn decompose(
             last = Some(r);
         }
         let last = last.expect("at least one step per level");
+        // S_i as measured and rebuilt: without specks (neither side could say where they are).
+        clear_specks(&mut phi, SPECK);
         // The flow leaves φ a signed distance within its band; samples near its edge or beyond
         // need it redistanced as far as they are (the tricubic stencil reaches 2 voxels out).
         let farthest = tracks
@@ -216,27 +220,30 @@ pub fn decompose(
         let mut next: Vec<Point3<f64>> = projected.iter().map(|p| p.point).collect();
         let mut w: Vec<Vector3<f64>> = next.iter().zip(&tracks.x).map(|(a, b)| a - b).collect();
         if let Some(previous_phi) = &previous_phi {
-            let mut around: Option<Vec<Point3<f64>>> = None;
+            let mut found: Option<Vec<usize>> = None;
             for _ in 0..opts.misread_rounds {
-                let new = misread_points(
+                let misread = misread_points(
                     previous_phi,
                     &phi,
                     &tracks.x,
                     tracks.normals.last().expect("n_{i-1} is set"),
                     &w,
-                    around.as_deref(),
+                    found.as_deref(),
                     &AdvectOptions::default(),
                     &opts.projection,
                 );
-                if new.is_empty() {
+                if misread.is_empty() {
                     break;
                 }
+                let new: Vec<Point3<f64>> = misread.iter().map(|m| m.point).collect();
                 let arrived = project_with_rescue(&phi, &new, &opts.projection)?;
                 unconverged += arrived.iter().filter(|p| !p.converged).count();
                 w.extend(arrived.iter().zip(&new).map(|(a, b)| a.point - b));
                 next.extend(arrived.iter().map(|p| p.point));
-                tracks.append(previous_phi, new.clone(), level - 1);
-                around = Some(new);
+                tracks.append(previous_phi, new, level - 1);
+                let nodes = found.get_or_insert_with(Vec::new);
+                nodes.extend(misread.iter().map(|m| m.node));
+                nodes.sort_unstable();
             }
         }
         let n_i = outward_normals(&phi, &next);

@@ -7,25 +7,44 @@
 //! the marching-cubes surface ([`super::cover`]) can still leave a node reading the wrong side or
 //! a distance off by a third of a voxel; a sample at that node's foot point on S_{i−1} (its
 //! Newton projection) gives the rebuild the plane it lacked.
+//!
+//! A node can also be read closely enough and still change S̃_{i−1}: on a grid face whose
+//! corners alternate in sign, the marching cubes join the inside corners or not by the sign of
+//! the bilinear saddle (the asymptotic decider), and where S_{i−1} pinches that sign turns on
+//! errors of hundredths of a voxel, and the two ways differ by up to half a voxel. Such a face,
+//! read otherwise than φ_{i−1} decides it, counts its four corners as misread.
 
-use super::project::{converged_projections, LevelProjectOptions};
+use super::project::{project_to_zero_level, LevelProjectOptions};
 use super::reconstruct::{AdvectOptions, TangentPlanes};
-use crate::grid::Grid3;
+use crate::grid::{face_neighbours, Grid3};
+use crate::levelset::speck::{clear_specks, SPECK};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
 /// A node counts as misread when the rebuild's value differs from φ_{i−1} by more than this
-/// (voxels), or has the other sign where |φ_{i−1}| exceeds [`SIGN_MARGIN`].
+/// (voxels), or has the other sign where |φ_{i−1}| exceeds [`SIGN_MARGIN`] or the node has no
+/// neighbour across S_{i−1}.
 pub const MISREAD_TOLERANCE: f64 = 0.3;
 
-/// Nodes this near S_{i−1} (voxels) may have either sign in the rebuild.
+/// Nodes this near S_{i−1} (voxels), with a neighbour across it, may have either sign in the
+/// rebuild.
 const SIGN_MARGIN: f64 = 0.05;
+
+/// A node the rebuild misreads and its foot point on S_{i−1}.
+#[derive(Debug, Clone, Copy)]
+pub struct Misread {
+    /// Index of the node in the grid.
+    pub node: usize,
+    /// Its Newton projection onto S_{i−1}.
+    pub point: Point3<f64>,
+}
 
 /// The nodes within one voxel of S_{i−1} (|φ_{i−1}| < h) that the rebuild of φ_{i−1} from
 /// `phi` (φ_i) and the samples of S_{i−1} (`previous`, with `normals` n_{i−1} and `details`
-/// W_i) misreads, projected onto S_{i−1} (those whose projection converges). With `around`,
-/// only the nodes within two voxels of those points are checked (a second round after samples
-/// were added there).
+/// W_i) misreads — a node's value, or a face's decider (see the module doc) — with their foot
+/// points on S_{i−1} (the nodes whose projection converges). With `around` (sorted: the nodes
+/// found in earlier rounds, whose samples have since been added), only the nodes within two
+/// voxels of those are checked, and those themselves are not given again.
 #[allow(clippy::too_many_arguments)]
 pub fn misread_points(
     previous_phi: &Grid3,
@@ -33,48 +52,109 @@ pub fn misread_points(
     previous: &[Point3<f64>],
     normals: &[Vector3<f64>],
     details: &[Vector3<f64>],
-    around: Option<&[Point3<f64>]>,
+    around: Option<&[usize]>,
     advect: &AdvectOptions,
     projection: &LevelProjectOptions,
-) -> Vec<Point3<f64>> {
+) -> Vec<Misread> {
     let h = phi.voxel();
-    let planes = TangentPlanes::new(phi, previous, normals, details, advect);
-    let check = |n: usize| -> Option<Point3<f64>> {
-        let a = previous_phi.data()[n] as f64;
-        if a.abs() >= h {
-            return None;
-        }
-        let b = planes.node_value(phi, n) as f64;
-        let flipped = (a < 0.0) != (b < 0.0) && a.abs() > SIGN_MARGIN * h;
-        if (a - b).abs() > MISREAD_TOLERANCE * h || flipped {
-            let [i, j, k] = phi.coords(n);
-            Some(phi.world(i, j, k))
-        } else {
-            None
-        }
-    };
-    let nodes: Vec<Point3<f64>> = match around {
-        None => (0..phi.data().len())
-            .into_par_iter()
-            .filter_map(check)
-            .collect(),
-        Some(points) => {
-            let mut candidates = nodes_near(phi, points, 2);
+    let truth = previous_phi.data();
+    let near = |n: &usize| (truth[*n].abs() as f64) < h;
+    let checked: Vec<usize> = match around {
+        None => (0..truth.len()).into_par_iter().filter(near).collect(),
+        Some(nodes) => {
+            let mut candidates = nodes_near(phi, nodes, 2);
             candidates.sort_unstable();
             candidates.dedup();
-            candidates.into_par_iter().filter_map(check).collect()
+            candidates.into_iter().filter(near).collect()
         }
     };
-    converged_projections(previous_phi, &nodes, projection)
+    let planes = TangentPlanes::new(phi, previous, normals, details, advect);
+    let read: Vec<f32> = checked
+        .par_iter()
+        .map(|&n| planes.node_value(phi, n))
+        .collect();
+    // The rebuild's reading at the checked nodes, φ_{i−1} elsewhere (a node farther than h
+    // from S_{i−1} read with the other sign is caught by its own check), specks cleared as the
+    // rebuild clears them.
+    let mut reading = previous_phi.clone();
+    for (&n, &b) in checked.iter().zip(&read) {
+        reading.data_mut()[n] = b;
+    }
+    clear_specks(&mut reading, SPECK);
+    let values = reading.data();
+    let dims = phi.dims();
+    let steps = [1, dims[0], dims[0] * dims[1]];
+    let mut nodes: Vec<usize> = checked
+        .par_iter()
+        .flat_map_iter(|&n| {
+            let (a, b) = (truth[n] as f64, values[n] as f64);
+            // Either sign is fine next to S_{i−1} only: a node near zero whose neighbours all
+            // share its sign would, flipped, stand alone as a speck of surface.
+            let flipped = (a < 0.0) != (b < 0.0)
+                && (a.abs() > SIGN_MARGIN * h
+                    || face_neighbours(dims, n).all(|m| (truth[m] < 0.0) == (a < 0.0)));
+            let misread = (a - b).abs() > MISREAD_TOLERANCE * h || flipped;
+            // The three faces with n as their lowest corner, corners in cyclic order.
+            let c = phi.coords(n);
+            let faces = [(0, 1), (0, 2), (1, 2)]
+                .into_iter()
+                .filter_map(move |(u, v)| {
+                    if c[u] + 1 >= dims[u] || c[v] + 1 >= dims[v] {
+                        return None;
+                    }
+                    let corners = [n, n + steps[u], n + steps[u] + steps[v], n + steps[v]];
+                    let decide = |g: &[f32]| face_joined(corners.map(|m| g[m]));
+                    (decide(truth) != decide(values)).then_some(corners)
+                });
+            misread.then_some(n).into_iter().chain(faces.flatten())
+        })
+        .collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    if let Some(before) = around {
+        nodes.retain(|n| before.binary_search(n).is_err());
+    }
+    let points: Vec<Point3<f64>> = nodes
+        .iter()
+        .map(|&n| {
+            let [i, j, k] = phi.coords(n);
+            phi.world(i, j, k)
+        })
+        .collect();
+    project_to_zero_level(previous_phi, &points, projection)
+        .into_iter()
+        .zip(nodes)
+        .filter(|(p, _)| p.converged)
+        .map(|(p, node)| Misread {
+            node,
+            point: p.point,
+        })
+        .collect()
 }
 
-/// The nodes of `phi` within `reach` nodes (along each axis) of the node nearest each point.
-fn nodes_near(phi: &Grid3, points: &[Point3<f64>], reach: i64) -> Vec<usize> {
+/// The marching cubes' reading of a face from its corner values in cyclic order (the asymptotic
+/// decider, as [`crate::levelset::marching_cubes`] decides it): `None` when the face is not
+/// ambiguous, else whether its inside corners are joined across it.
+fn face_joined(v: [f32; 4]) -> Option<bool> {
+    let inside = v.map(|x| x < 0.0);
+    if inside[0] != inside[2] || inside[1] != inside[3] || inside[0] == inside[1] {
+        return None;
+    }
+    let v = v.map(f64::from);
+    let (joined, apart) = if inside[0] {
+        (v[0] * v[2], v[1] * v[3])
+    } else {
+        (v[1] * v[3], v[0] * v[2])
+    };
+    Some(joined > apart)
+}
+
+/// The nodes of `phi` within `reach` nodes (along each axis) of each of `nodes`.
+fn nodes_near(phi: &Grid3, nodes: &[usize], reach: i64) -> Vec<usize> {
     let dims = phi.dims().map(|d| d as i64);
     let mut out = Vec::new();
-    for p in points {
-        let q = phi.transform().world_to_index(p);
-        let c = [0, 1, 2].map(|a| q[a].round() as i64);
+    for &n in nodes {
+        let c = phi.coords(n).map(|v| v as i64);
         for z in c[2] - reach..=c[2] + reach {
             for y in c[1] - reach..=c[1] + reach {
                 for x in c[0] - reach..=c[0] + reach {
@@ -86,4 +166,40 @@ fn nodes_near(phi: &Grid3, points: &[Point3<f64>], reach: i64) -> Vec<usize> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::GridTransform;
+    use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
+    use crate::mesh::topology::connected_components;
+
+    /// The face decider agrees with the marching cubes: on a 2×2×2 grid whose upper layer is
+    /// outside, the lower face's two inside corners make one component when joined, two apart.
+    #[test]
+    fn face_joined_decides_as_the_marching_cubes() {
+        let h = 1.0;
+        let cases: [[f32; 4]; 6] = [
+            [-0.4, 0.1, -0.4, 0.1],
+            [-0.1, 0.4, -0.1, 0.4],
+            [0.3, -0.2, 0.3, -0.25],
+            [0.2, -0.3, 0.25, -0.3],
+            [-0.3, 0.31, -0.3, 0.29],
+            [-0.2, 0.2, -0.2, 0.2],
+        ];
+        for v in cases {
+            let mut g = Grid3::new([2, 2, 2], GridTransform::new(Point3::origin(), h), 1.0)
+                .unwrap();
+            for (c, (i, j)) in [(0, 0), (1, 0), (1, 1), (0, 1)].into_iter().enumerate() {
+                g.set(i, j, 0, v[c]);
+            }
+            let mesh = extract_surface(&g, &ExtractOptions::default()).unwrap();
+            let (components, _) = connected_components(&mesh);
+            let joined = face_joined(v).expect("ambiguous");
+            assert_eq!(joined, components == 1, "{v:?}: {components} components");
+        }
+        assert_eq!(face_joined([-0.1, -0.1, 0.2, 0.2]), None);
+        assert_eq!(face_joined([-0.1, 0.1, 0.2, 0.2]), None);
+    }
 }

@@ -13,6 +13,7 @@
 use super::extend::{extend_to_band, ExtendFrom, NodeField, SampleIndex};
 use crate::grid::Grid3;
 use crate::levelset::redistance::{redistance, RedistanceOptions, RedistanceScheme};
+use crate::levelset::speck::{clear_specks, SPECK};
 use crate::Result;
 use nalgebra::{Point3, Vector3, Vector4};
 use rayon::prelude::*;
@@ -172,6 +173,7 @@ pub fn rebuild_from_tangent_planes(
         .map(|n| planes.node_value(phi, n))
         .collect();
     out.data_mut().copy_from_slice(&values);
+    clear_specks(&mut out, SPECK);
     // A band is enough for marching cubes and for the next level's rebuild, which reads φ's sign
     // beyond `near` and takes distances only near the samples. The nodes next to the zero level
     // set keep the planes' distances: the redistancer would measure them again to its own
