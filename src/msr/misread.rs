@@ -189,8 +189,8 @@ mod tests {
             [-0.2, 0.2, -0.2, 0.2],
         ];
         for v in cases {
-            let mut g = Grid3::new([2, 2, 2], GridTransform::new(Point3::origin(), h), 1.0)
-                .unwrap();
+            let mut g =
+                Grid3::new([2, 2, 2], GridTransform::new(Point3::origin(), h), 1.0).unwrap();
             for (c, (i, j)) in [(0, 0), (1, 0), (1, 1), (0, 1)].into_iter().enumerate() {
                 g.set(i, j, 0, v[c]);
             }
