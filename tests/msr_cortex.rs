@@ -4,10 +4,10 @@
 //! and the levels smoother (the mean |κ| at the samples falls);
 //! both level-set reconstructions of S_{i−1} from S_i stay within 0.05h of it on average; the
 //! tangent-plane reconstruction (the default) within 0.5h everywhere (measured 2026-12-03 with
-//! 100,000 area samples per surface and every vertex: 0.39, 0.42, 0.45, 0.47, 0.23 h; with
-//! 2,000,000 samples, which find maxima the default misses where a face of the grid decides a
-//! pinch of S_{i−1} on a saddle of hundredths of a voxel, see `msr::misread`: larger, in the
-//! closing note of issue 5).
+//! 100,000 area samples per surface and every vertex: 0.39, 0.42, 0.44, 0.43, 0.13 h; with
+//! 2,000,000 samples, which find maxima the default misses: 0.46, 0.45, 0.45, 0.55, 0.31 h, the
+//! 0.55h where a face of the grid decides a pinch of S_3 on a saddle of a thousandth of h², see
+//! `msr::misread`).
 //! Printed (`--nocapture`): the table of Hausdorff(S_{i−1}, S̃_{i−1}) in h for both level-set
 //! methods, with the levels where the issue's goal of 0.5h is not met.
 

@@ -187,7 +187,8 @@ pub fn decompose(
     for level in 1..=opts.levels {
         if let Some(radius) = opts.cover_radius {
             let new = cover_gaps(&phi, &tracks.x, radius * h, &opts.projection)?;
-            tracks.append(&phi, new, level - 1);
+            let normals = outward_normals(&phi, &new);
+            tracks.append(new, normals, level - 1);
         }
         let previous_phi = (opts.misread_rounds > 0).then(|| phi.clone());
         let mut last = None;
@@ -240,7 +241,7 @@ pub fn decompose(
                 unconverged += arrived.iter().filter(|p| !p.converged).count();
                 w.extend(arrived.iter().zip(&new).map(|(a, b)| a.point - b));
                 next.extend(arrived.iter().map(|p| p.point));
-                tracks.append(previous_phi, new, level - 1);
+                tracks.append(new, misread.iter().map(|m| m.normal).collect(), level - 1);
                 let nodes = found.get_or_insert_with(Vec::new);
                 nodes.extend(misread.iter().map(|m| m.node));
                 nodes.sort_unstable();
@@ -313,14 +314,11 @@ struct Tracks {
 }
 
 impl Tracks {
-    /// Adds `new` samples of S_{born} (on the zero level set of `phi`, φ_{born}): their normals
-    /// at that level from `phi`, zero normals and details before it.
-    fn append(&mut self, phi: &Grid3, new: Vec<Point3<f64>>, born: usize) {
+    /// Adds `new` samples of S_{born} with their `normals` at that level (zero normals and
+    /// details before it).
+    fn append(&mut self, new: Vec<Point3<f64>>, normals: Vec<Vector3<f64>>, born: usize) {
         let total = self.x.len() + new.len();
-        self.normals
-            .last_mut()
-            .expect("n_0 is set")
-            .extend(outward_normals(phi, &new));
+        self.normals.last_mut().expect("n_0 is set").extend(normals);
         for n in self.normals.iter_mut().rev().skip(1) {
             n.resize(total, Vector3::zeros());
         }
@@ -378,7 +376,7 @@ pub fn mean_abs_curvature(phi: &Grid3, points: &[Point3<f64>]) -> f64 {
 }
 
 /// ∇φ/|∇φ| of the tricubic interpolant at `p`; None off the grid or where the gradient vanishes.
-fn unit_normal(phi: &Grid3, p: &Point3<f64>) -> Option<Vector3<f64>> {
+pub(super) fn unit_normal(phi: &Grid3, p: &Point3<f64>) -> Option<Vector3<f64>> {
     phi.gradient_tricubic(p)
         .and_then(|g| g.try_normalize(1e-12))
 }

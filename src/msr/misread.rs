@@ -12,8 +12,15 @@
 //! corners alternate in sign, the marching cubes join the inside corners or not by the sign of
 //! the bilinear saddle (the asymptotic decider), and where S_{i−1} pinches that sign turns on
 //! errors of hundredths of a voxel, and the two ways differ by up to half a voxel. Such a face,
-//! read otherwise than φ_{i−1} decides it, counts its four corners as misread.
+//! read otherwise than φ_{i−1} decides it, counts its four corners as misread. Their values
+//! are near enough for their own check, so their foot points would give the rebuild nothing
+//! new; what it lacks is the values themselves, which in a pinch are not the distances to the
+//! tricubic surface the samples lie on (the grid's φ_{i−1} there is no distance: |∇φ| falls
+//! to a half). So each corner x gets a sample where its own value puts S_{i−1}: at
+//! x − φ_{i−1}(x) n(x), with the normal n(x) of x, whose tangent plane gives x exactly
+//! φ_{i−1}(x) (and the rebuild keeps no value farther than its nearest sample).
 
+use super::decompose::unit_normal;
 use super::project::{project_to_zero_level, LevelProjectOptions};
 use super::reconstruct::{AdvectOptions, TangentPlanes};
 use crate::grid::{face_neighbours, Grid3};
@@ -35,8 +42,10 @@ const SIGN_MARGIN: f64 = 0.05;
 pub struct Misread {
     /// Index of the node in the grid.
     pub node: usize,
-    /// Its Newton projection onto S_{i−1}.
+    /// The sample for it on S_{i−1}.
     pub point: Point3<f64>,
+    /// The sample's outward unit normal n_{i−1}.
+    pub normal: Vector3<f64>,
 }
 
 /// The nodes within one voxel of S_{i−1} (|φ_{i−1}| < h) that the rebuild of φ_{i−1} from
@@ -84,7 +93,9 @@ pub fn misread_points(
     let values = reading.data();
     let dims = phi.dims();
     let steps = [1, dims[0], dims[0] * dims[1]];
-    let mut nodes: Vec<usize> = checked
+    // (node, whether its own value is misread): a node of a misread face only is read closely
+    // enough on its own.
+    let mut nodes: Vec<(usize, bool)> = checked
         .par_iter()
         .flat_map_iter(|&n| {
             let (a, b) = (truth[n] as f64, values[n] as f64);
@@ -104,32 +115,49 @@ pub fn misread_points(
                     }
                     let corners = [n, n + steps[u], n + steps[u] + steps[v], n + steps[v]];
                     let decide = |g: &[f32]| face_joined(corners.map(|m| g[m]));
-                    (decide(truth) != decide(values)).then_some(corners)
+                    (decide(truth) != decide(values)).then_some(corners.map(|m| (m, false)))
                 });
-            misread.then_some(n).into_iter().chain(faces.flatten())
+            misread
+                .then_some((n, true))
+                .into_iter()
+                .chain(faces.flatten())
         })
         .collect();
-    nodes.sort_unstable();
-    nodes.dedup();
+    // Value-misread first among a node's entries, then one entry per node.
+    nodes.sort_unstable_by_key(|&(n, own)| (n, !own));
+    nodes.dedup_by_key(|e| e.0);
     if let Some(before) = around {
-        nodes.retain(|n| before.binary_search(n).is_err());
+        nodes.retain(|(n, _)| before.binary_search(n).is_err());
     }
-    let points: Vec<Point3<f64>> = nodes
-        .iter()
-        .map(|&n| {
-            let [i, j, k] = phi.coords(n);
-            phi.world(i, j, k)
-        })
-        .collect();
-    project_to_zero_level(previous_phi, &points, projection)
+    let world = |n: usize| {
+        let [i, j, k] = phi.coords(n);
+        phi.world(i, j, k)
+    };
+    let (own, face): (Vec<(usize, bool)>, Vec<(usize, bool)>) =
+        nodes.into_iter().partition(|e| e.1);
+    let points: Vec<Point3<f64>> = own.iter().map(|e| world(e.0)).collect();
+    let projected = project_to_zero_level(previous_phi, &points, projection)
         .into_iter()
-        .zip(nodes)
+        .zip(own)
         .filter(|(p, _)| p.converged)
-        .map(|(p, node)| Misread {
+        .map(|(p, (node, _))| Misread {
             node,
             point: p.point,
+            normal: unit_normal(previous_phi, &p.point).unwrap_or_else(Vector3::zeros),
+        });
+    // A face's corner: the point its own value places on S_{i−1}, |φ_{i−1}| away along its
+    // normal, with that normal, so that the sample's plane gives the node exactly its value
+    // (see the module doc).
+    let placed = face.into_iter().filter_map(|(node, _)| {
+        let x = world(node);
+        let normal = unit_normal(previous_phi, &x)?;
+        Some(Misread {
+            node,
+            point: x - truth[node] as f64 * normal,
+            normal,
         })
-        .collect()
+    });
+    projected.chain(placed).collect()
 }
 
 /// The marching cubes' reading of a face from its corner values in cyclic order (the asymptotic
