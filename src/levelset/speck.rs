@@ -60,7 +60,7 @@ mod tests {
 
     #[test]
     fn a_lone_node_near_zero_takes_its_neighbours_side() {
-        let h = 0.5;
+        let h: f32 = 0.5;
         // Outside everywhere but a node at −0.02h (a speck), one at −0.2h (a real droplet, kept)
         // and a zero on the border (left alone).
         let mut g = grid(|i, j, k| match (i, j, k) {
@@ -70,8 +70,8 @@ mod tests {
             _ => h,
         });
         assert_eq!(clear_specks(&mut g, SPECK), 1);
-        assert_eq!(g.get(1, 1, 1), (0.02 * h) as f32);
-        assert_eq!(g.get(3, 3, 3), (-0.2 * h) as f32);
+        assert_eq!(g.get(1, 1, 1), 0.02 * h);
+        assert_eq!(g.get(3, 3, 3), -0.2 * h);
         // Inside everywhere but a zero (outside by the sign test): it goes just inside.
         let mut g = grid(|i, j, k| if (i, j, k) == (2, 2, 2) { 0.0 } else { -h });
         assert_eq!(clear_specks(&mut g, SPECK), 1);

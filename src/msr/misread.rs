@@ -133,8 +133,7 @@ pub fn misread_points(
         let [i, j, k] = phi.coords(n);
         phi.world(i, j, k)
     };
-    let (own, face): (Vec<(usize, bool)>, Vec<(usize, bool)>) =
-        nodes.into_iter().partition(|e| e.1);
+    let (own, face): (Vec<_>, Vec<_>) = nodes.into_iter().partition(|e| e.1);
     let points: Vec<Point3<f64>> = own.iter().map(|e| world(e.0)).collect();
     let projected = project_to_zero_level(previous_phi, &points, projection)
         .into_iter()
