@@ -18,7 +18,9 @@
 //! tricubic surface the samples lie on (the grid's φ_{i−1} there is no distance: |∇φ| falls
 //! to a half). So each corner x gets a sample where its own value puts S_{i−1}: at
 //! x − φ_{i−1}(x) n(x), with the normal n(x) of x, whose tangent plane gives x exactly
-//! φ_{i−1}(x) (and the rebuild keeps no value farther than its nearest sample).
+//! φ_{i−1}(x) (and the rebuild keeps no value farther than its nearest sample). Such a sample
+//! lies off the tricubic zero level set by about what φ_{i−1} there is off a distance (a tenth
+//! of a voxel); its detail W_i is still its projection onto S_i.
 
 use super::decompose::unit_normal;
 use super::project::{project_to_zero_level, LevelProjectOptions};
@@ -37,7 +39,7 @@ pub const MISREAD_TOLERANCE: f64 = 0.3;
 /// rebuild.
 const SIGN_MARGIN: f64 = 0.05;
 
-/// A node the rebuild misreads and its foot point on S_{i−1}.
+/// A node the rebuild misreads and the sample added for it.
 #[derive(Debug, Clone, Copy)]
 pub struct Misread {
     /// Index of the node in the grid.
@@ -50,8 +52,9 @@ pub struct Misread {
 
 /// The nodes within one voxel of S_{i−1} (|φ_{i−1}| < h) that the rebuild of φ_{i−1} from
 /// `phi` (φ_i) and the samples of S_{i−1} (`previous`, with `normals` n_{i−1} and `details`
-/// W_i) misreads — a node's value, or a face's decider (see the module doc) — with their foot
-/// points on S_{i−1} (the nodes whose projection converges). With `around` (sorted: the nodes
+/// W_i) misreads — a node's value, or a face's decider (see the module doc) — with the samples
+/// for them: a misread value's foot point on S_{i−1} (the nodes whose projection converges), a
+/// misread face's corner where its value puts S_{i−1}. With `around` (sorted: the nodes
 /// found in earlier rounds, whose samples have since been added), only the nodes within two
 /// voxels of those are checked, and those themselves are not given again.
 #[allow(clippy::too_many_arguments)]
