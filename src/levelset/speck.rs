@@ -21,9 +21,11 @@ pub fn clear_specks(phi: &mut Grid3, below: f64) -> usize {
         .into_par_iter()
         .filter(|&n| {
             let v = data[n];
+            if v.abs() >= limit {
+                return false;
+            }
             let c = phi.coords(n);
-            v.abs() < limit
-                && (0..3).all(|a| c[a] > 0 && c[a] + 1 < dims[a])
+            (0..3).all(|a| c[a] > 0 && c[a] + 1 < dims[a])
                 && face_neighbours(dims, n).all(|m| (data[m] < 0.0) != (v < 0.0))
         })
         .collect();

@@ -7,7 +7,7 @@
 //! the covering radius becomes a new sample, Newton-projected onto the zero level set, and covers
 //! its neighbourhood in turn (greedy, in vertex order, so the result is deterministic).
 
-use super::project::{converged_projections, LevelProjectOptions};
+use super::project::{project_to_zero_level, LevelProjectOptions};
 use crate::grid::Grid3;
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::Result;
@@ -36,7 +36,11 @@ pub fn cover_gaps(
             candidates.push(*v);
         }
     }
-    Ok(converged_projections(phi, &candidates, projection))
+    Ok(project_to_zero_level(phi, &candidates, projection)
+        .into_iter()
+        .filter(|p| p.converged)
+        .map(|p| p.point)
+        .collect())
 }
 
 /// Points bucketed in cubic cells of edge `cell` (world units): each occupied cell holds the

@@ -36,8 +36,8 @@ use rayon::prelude::*;
 pub const MISREAD_TOLERANCE: f64 = 0.3;
 
 /// Nodes this near S_{i−1} (voxels), with a neighbour across it, may have either sign in the
-/// rebuild.
-const SIGN_MARGIN: f64 = 0.05;
+/// rebuild (without one, they are the specks the rebuild clears).
+const SIGN_MARGIN: f64 = SPECK;
 
 /// A node the rebuild misreads and the sample added for it.
 #[derive(Debug, Clone, Copy)]

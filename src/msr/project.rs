@@ -90,17 +90,3 @@ fn project_one(phi: &Grid3, p: &Point3<f64>, opts: &LevelProjectOptions) -> Proj
     }
     best
 }
-
-/// The projections of `points` onto the zero level set of `phi` that converged (the others
-/// dropped), for samples added on a level.
-pub fn converged_projections(
-    phi: &Grid3,
-    points: &[Point3<f64>],
-    opts: &LevelProjectOptions,
-) -> Vec<Point3<f64>> {
-    project_to_zero_level(phi, points, opts)
-        .into_iter()
-        .filter(|p| p.converged)
-        .map(|p| p.point)
-        .collect()
-}
