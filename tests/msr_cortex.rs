@@ -3,11 +3,12 @@
 //! level keeps the volume within 1%; details get sparser (the fraction of |w_i| < 0.1h grows)
 //! and the levels smoother (the mean |κ| at the samples falls);
 //! both level-set reconstructions of S_{i−1} from S_i stay within 0.05h of it on average; the
-//! tangent-plane reconstruction (the default) within 0.5h everywhere (measured 2026-12-03 with
-//! 100,000 area samples per surface and every vertex: 0.39, 0.42, 0.44, 0.43, 0.13 h; with
-//! 2,000,000 samples, which find maxima the default misses: 0.46, 0.45, 0.45, 0.55, 0.31 h, the
-//! 0.55h where a face of the grid decides a pinch of S_3 on a saddle of a thousandth of h², see
-//! `msr::misread`).
+//! tangent-plane reconstruction (the default) within 0.5h everywhere. The Hausdorff distance is
+//! a largest distance, estimated from samples, so more samples find maxima fewer miss: the
+//! default measure takes 1,000,000 area samples per surface and every vertex, and
+//! `VESSELMSR_HAUSDORFF_SAMPLES` sets another count (asserted all the same). Measured
+//! 2026-12-03: 0.37, 0.23, 0.22, 0.21, 0.22 h with 100,000 samples; 0.41, 0.31, 0.36, 0.35,
+//! 0.31 h with 2,000,000; 0.39, 0.33, 0.40, 0.38, 0.31 h with 8,000,000.
 //! Printed (`--nocapture`): the table of Hausdorff(S_{i−1}, S̃_{i−1}) in h for both level-set
 //! methods, with the levels where the issue's goal of 0.5h is not met.
 
@@ -44,13 +45,11 @@ fn cortex_five_levels_of_vpmcf() {
         ..Default::default()
     };
     let d = decompose(&mesh, phi, &opts, |_, _| {}).unwrap();
-    // The Hausdorff distance is a largest distance, sampled: more samples find maxima the default
-    // misses (the measure of the closing notes: VESSELMSR_HAUSDORFF_SAMPLES=2000000).
-    // That measure prints its table (and the levels over 0.5h) without asserting the bound.
-    let dense: Option<usize> = std::env::var("VESSELMSR_HAUSDORFF_SAMPLES")
+    // The Hausdorff distance is a largest distance, sampled (see the module doc).
+    let samples: usize = std::env::var("VESSELMSR_HAUSDORFF_SAMPLES")
         .ok()
-        .and_then(|s| s.parse().ok());
-    let samples = dense.unwrap_or(100_000);
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1_000_000);
     let m = &d.msr;
     println!(
         "cortex: h = {h:.4}, T = {:.4} ({:.0} h²), dt = {:.4}, {} samples; Hausdorff from {samples} \
@@ -136,20 +135,15 @@ fn cortex_five_levels_of_vpmcf() {
             advect.mean_distance < 0.05 * h && tangent.mean_distance < 0.05 * h,
             "level {i}"
         );
-        assert!(
-            dense.is_some() || tangent.hausdorff <= 0.5 * h,
-            "level {i}: tangent planes {:.2}h > 0.5h",
-            tangent.hausdorff / h
-        );
-        if tangent.hausdorff.min(advect.hausdorff) > 0.5 * h {
+        if tangent.hausdorff > 0.5 * h {
             not_met.push(format!(
-                "level {i}: Hausdorff {:.2}h (tangent planes) / {:.2}h (advection) > 0.5h",
-                tangent.hausdorff / h,
-                advect.hausdorff / h
+                "level {i}: Hausdorff {:.2}h (tangent planes) > 0.5h",
+                tangent.hausdorff / h
             ));
         }
     }
     for n in &not_met {
         println!("NOT MET: {n}");
     }
+    assert!(not_met.is_empty(), "{not_met:?}");
 }

@@ -18,7 +18,8 @@
 //! tricubic surface the samples lie on (the grid's φ_{i−1} there is no distance: |∇φ| falls
 //! to a half). So each corner x gets a sample where its own value puts S_{i−1}: at
 //! x − φ_{i−1}(x) n(x), with the normal n(x) of x, whose tangent plane gives x exactly
-//! φ_{i−1}(x) (and the rebuild keeps no value farther than its nearest sample). Such a sample
+//! φ_{i−1}(x): its normal line passes through x, so the rebuild takes it as x's foot point and
+//! gives x that distance alone, not averaged with its neighbours' planes. Such a sample
 //! lies off the tricubic zero level set by about what φ_{i−1} there is off a distance (a tenth
 //! of a voxel); its detail W_i is still its projection onto S_i.
 

@@ -31,6 +31,12 @@ const LATERAL_REACH: f64 = 1.5;
 /// the node exceeds the nearest's by σ² weighs e^(−1/2) of it.
 const PLANE_SPREAD: f64 = 0.25;
 
+/// A sample whose normal line passes this near a node (voxels) is the node's foot point, whose
+/// plane gives the node its distance alone (no average, no clamp). The decomposition's samples
+/// for misread nodes are such ([`super::misread`]); another sample passes this near a node
+/// by chance only, and its plane is then as good a distance.
+const FOOT_LATERAL: f64 = 0.01;
+
 /// A node farther than this (voxels) beyond the largest detail of the samples around it from
 /// S_i keeps φ_i. On the cortex's five levels no node farther than half a voxel beyond it takes
 /// the other side from the planes, so such a node, and its neighbours a voxel nearer, keep
@@ -165,7 +171,10 @@ pub fn advect_back(
 /// The value is kept within what the samples allow: no farther from S_{i−1} than the nearest
 /// sample, d_min, and no nearer than d_min − `coverage` (every point of S_{i−1} has a sample
 /// within `coverage`), so a plane seen far from its sample, where the surface has curved away,
-/// cannot put a zero crossing where no sample is.
+/// cannot put a zero crossing where no sample is. A sample whose normal line passes through the
+/// node (within `FOOT_LATERAL`, a hundredth of a voxel) is the node's foot point: its plane is
+/// seen where it was taken, so the node takes its distance alone, as it is (the decomposition
+/// places such samples where this rebuild would otherwise misread S_{i−1}, [`super::misread`]).
 /// Where S_i has closed a fold of S_{i−1} (a sulcus smoothed over), this keeps the fold's
 /// walls apart, which the plain translation of [`advect_back`] cannot.
 pub fn rebuild_from_tangent_planes(
@@ -220,6 +229,7 @@ pub struct TangentPlanes<'a> {
     lateral_reach: f64,
     two_sigma2: f64,
     coverage: f64,
+    foot_lateral: f64,
     h: f64,
 }
 
@@ -254,6 +264,7 @@ impl<'a> TangentPlanes<'a> {
             lateral_reach: LATERAL_REACH * h,
             two_sigma2: 2.0 * (PLANE_SPREAD * h).powi(2),
             coverage: opts.coverage * h,
+            foot_lateral: FOOT_LATERAL * h,
             h,
         }
     }
@@ -310,6 +321,7 @@ impl<'a> TangentPlanes<'a> {
             .collect();
         let (mut weight, mut lateral, mut moved) = (0.0, 0.0, 0.0);
         let (mut plane, mut plane_weight) = (0.0, 0.0);
+        let mut foot: Option<(f64, f64)> = None;
         let sheet = self.normals[found[0].0];
         for (&(s, d2), &(to_disc, along, lat)) in found.iter().zip(&per) {
             let w = (-(to_disc - best) / self.softness).exp();
@@ -322,12 +334,25 @@ impl<'a> TangentPlanes<'a> {
             let wp = (-(d2 - d2min) / self.two_sigma2).exp();
             plane += wp * along;
             plane_weight += wp;
+            if lat < self.foot_lateral
+                && d2.sqrt() <= d_min + self.coverage
+                && foot.is_none_or(|(l, _)| lat < l)
+            {
+                foot = Some((lat, along));
+            }
         }
-        let value = plane / plane_weight;
-        let value = value
-            .abs()
-            .clamp((d_min - self.coverage).max(0.0), d_min)
-            .copysign(value);
+        let value = match foot {
+            // A sample whose normal line passes through the node is its foot point: its plane
+            // gives the node's distance as it is, with no average and no clamp.
+            Some((_, along)) => along,
+            None => {
+                let value = plane / plane_weight;
+                value
+                    .abs()
+                    .clamp((d_min - self.coverage).max(0.0), d_min)
+                    .copysign(value)
+            }
+        };
         Some(Vector4::new(value, best, lateral / weight, moved / weight))
     }
 }
