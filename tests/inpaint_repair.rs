@@ -64,8 +64,8 @@ fn assert_outside_kept(input: &TriMesh, output: &TriMesh, balls: &[Ball]) {
     let key = |m: &TriMesh, f: &[u32; 3]| {
         let mut k: Vec<[u64; 3]> = f
             .iter()
-            .map(|&v| m.vertices[v as usize].coords.map(f64::to_bits).into())
-            .map(|c: nalgebra::Vector3<u64>| [c.x, c.y, c.z])
+            .map(|&v| m.vertices[v as usize].coords.map(f64::to_bits))
+            .map(|c| [c.x, c.y, c.z])
             .collect();
         let min = (0..3).min_by_key(|&i| k[i]).unwrap();
         k.rotate_left(min);

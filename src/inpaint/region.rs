@@ -267,8 +267,8 @@ pub fn read_regions(path: &Path, mesh: &TriMesh) -> Result<Vec<Ball>> {
     Ok(balls)
 }
 
-/// Checks that every ball can be a damaged region of `mesh`: a finite centre, a finite radius
-/// > 0, a centre within the mesh's bounding box grown by the radius, and at least one surface
+/// Checks that every ball can be a damaged region of `mesh`: a finite centre, a positive finite
+/// radius, a centre within the mesh's bounding box grown by the radius, and at least one surface
 /// point inside the ball. Errors name the region (1-based) and its centre. No balls at all is an
 /// error too.
 pub fn validate_regions(mesh: &TriMesh, balls: &[Ball]) -> Result<()> {

@@ -134,7 +134,7 @@ pub fn open_tube(radius: f64, length: f64, segments: usize, rings: usize) -> Tri
         }
     }
     let id = |i: usize, j: usize| (j * segments + i % segments) as u32;
-    let faces = grid_faces(segments, rings - 1, |i, j| id(i, j));
+    let faces = grid_faces(segments, rings - 1, id);
     TriMesh::new(vertices, faces)
 }
 

@@ -456,7 +456,7 @@ pub(crate) fn orientation_of(
     }
     // Several shells: a cavity's shell rightly faces into the cavity (negative volume).
     let depths = super::measures::component_nesting_depths(map.mesh(), n_components, labels);
-    let outward_shell = |c: usize| (vols[c] >= 0.0) == (depths[c] % 2 == 0);
+    let outward_shell = |c: usize| (vols[c] >= 0.0) == depths[c].is_multiple_of(2);
     if (0..n_components).all(outward_shell) {
         Orientation::Outward
     } else if (0..n_components).all(|c| !outward_shell(c)) {

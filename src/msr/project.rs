@@ -78,7 +78,8 @@ fn project_one(phi: &Grid3, p: &Point3<f64>, opts: &LevelProjectOptions) -> Proj
             break;
         }
         let g2 = g.norm_squared();
-        if !(g2 > 1e-12) {
+        // Also stops on a NaN gradient.
+        if g2.is_nan() || g2 <= 1e-12 {
             break;
         }
         let mut step = -v * g / g2;
