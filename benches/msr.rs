@@ -12,19 +12,20 @@
 //! not timing the same algorithm.
 //!
 //! Measured 2026-12-03 (2 cores, shared): grid 113×265×198, h = 0.678, 2 steps of dt = 2h² per
-//! level; ours 627 257 samples (the input's 364 203 snapped onto S_0, those added where a
+//! level; ours 627 189 samples (the input's 364 203 snapped onto S_0, those added where a
 //! level's surface had none within h/4, and those where the rebuild would have misread a level,
 //! a node's value or a grid face's decider), the reference 674 745 (its φ, redistanced by the
 //! node-quantized `distance_transform_edt`, is rougher, so its surfaces get more; it does not add
-//! the misread samples, whose check costs ours ~3 s). Ours 38.4 s (median of 3; decompose
-//! 22.6 s, rebuilds 15.8 s), reference 391.3 s (decompose 149.3 s, of which the added samples
-//! 24.2 s; rebuilds 242.0 s): **ratio 10.2×**; a run an hour before, with the machine slower
-//! for both sides, 9.6× (ours 43.6 s, reference 416.6 s). Before the face check, the placed
-//! samples and the specks: ours 35.5–36.1 s, 10.6× twice; before the rebuild's index was built
-//! in parallel, 9.8× (ours 39.2 s). So the goal is met by a thin margin on this shared
-//! machine. The same day, before the reference added samples: ours 36.3 s, reference 277.6 s,
-//! 7.6× (2026-12-02: 6.6×; 2026-11-22: 3.9×). Mean |w_i| per level, ours / reference (h):
-//! 0.65/0.72, 0.64/0.68, 0.61/0.70, 0.66/0.58, 0.51/0.53 (the reference's projection is
+//! the misread samples, whose check costs ours ~3 s). Ours 34.5 s (median of 3; one run's
+//! decompose 28.5 s, rebuilds 13.1 s, on a machine slower then), reference 409.8 s (decompose
+//! 164.6 s, of which the added samples 26.4 s; rebuilds 245.3 s): **ratio 11.9×**, since the
+//! rebuild's nodes farther from S_i than the samples around them moved (by 1.5h) keep φ_i
+//! without querying the planes (rebuilds 15.9 s → 10.4 s in a quiet run). Before that: ours
+//! 38.4 s, 10.2× (and 9.6× in a run with the machine slower for both sides); before the face
+//! check, the placed samples and the specks, 10.6× twice; before the rebuild's index was built
+//! in parallel, 9.8×. The same day, before the reference added samples: ours 36.3 s, reference
+//! 277.6 s, 7.6× (2026-12-02: 6.6×; 2026-11-22: 3.9×). Mean |w_i| per level, ours / reference
+//! (h): 0.65/0.72, 0.64/0.68, 0.61/0.70, 0.66/0.58, 0.51/0.53 (the reference's projection is
 //! noisier: 2–3.5 thousand samples unconverged per level, ours none).
 //!
 //! Run: `cargo bench --bench msr` (the reference side needs reference/.venv, which
