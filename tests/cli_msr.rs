@@ -79,6 +79,8 @@ fn decompose_archive_levels_and_figures_round_trip() {
         s(&levels_dir),
         "--figures",
         s(&figures),
+        "--measure-rebuilds",
+        "200000",
     ]);
     let h = f(&report["voxel"]);
     assert!((h - 1.25).abs() < 1e-12, "{h}");
@@ -109,6 +111,11 @@ fn decompose_archive_levels_and_figures_round_trip() {
         assert!(mean > 0.01 && mean < 2.0, "{l}");
         let sparse = f(&l["sparse_fraction"]);
         assert!(sparse > 0.0 && sparse < 1.0, "{l}");
+        // The level-set rebuild of the level before from this one's exact φ (the paper's
+        // Figure 1 measure): within half a voxel.
+        let rebuilt = f(&l["rebuild_hausdorff_h"]);
+        assert!(rebuilt > 0.0 && rebuilt <= 0.5, "{l}");
+        assert!(f(&l["rebuild_mean_h"]) < 0.05, "{l}");
     }
 
     // The archive, read by the library, matches the report; the vertices method gives back the

@@ -1,5 +1,5 @@
 //! `vesselmsr decompose MESH -o MSR.npz [--levels N] [--time T] [--velocity …] [--c C] [--dt DT]
-//! [grid flags] [--levels-dir DIR] [--figures DIR]`: the multiscale representation of a mesh
+//! [grid flags] [--levels-dir DIR] [--figures DIR] [--measure-rebuilds [SAMPLES]]`: the multiscale representation of a mesh
 //! (paper Algorithm 1, [`crate::msr::decompose`]) written as one `.npz` archive.
 //!
 //! The mesh is voxelized, the grid padded for the motion (as `evolve` does), and the levels
@@ -7,16 +7,20 @@
 //! outputs for looking at the result: `--levels-dir` writes every scale S_0..S_N as PLY (S_k,
 //! k ≥ 1, with the per-vertex scalar `detail` = w_k, for ParaView or MeshLab), `--figures` the
 //! detail histograms per level (the paper's Figure 2) and a strip of S_0..S_N coloured by w_k
-//! (its Figure 1). Everything is computed before anything is written, so a failure leaves no
-//! output.
+//! (its Figure 1); `--measure-rebuilds` the paper's Figure 1 measure of the level-set
+//! reconstruction, each S_{i−1} against its rebuild from the exact φ_i
+//! ([`crate::msr::fidelity`]). Everything is computed before anything is written, so a failure
+//! leaves no output.
 
 use super::evolve::{pad_for_motion, MotionRoom, VelocityName};
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
 use super::{print_json, Context};
 use crate::io::write_mesh_with_scalars;
+use crate::mesh::distance::SurfaceDistanceOptions;
 use crate::motion::Velocity;
 use crate::msr::archive::write_msr;
 use crate::msr::decompose::{decompose, level_schedule, DecomposeOptions};
+use crate::msr::fidelity::measure_level_rebuilds;
 use crate::report::{
     histogram_grid, render_strip, write_png, Camera, HistogramOptions, Panel, RgbImage,
     StripOptions,
@@ -62,6 +66,12 @@ pub struct DecomposeArgs {
     /// DIR/levels_strip.png (S_0..S_N coloured by w_i).
     #[arg(long, value_name = "DIR")]
     pub figures: Option<PathBuf>,
+    /// Also measure, per level, the level-set reconstruction of S_{i−1} from the exact φ_i in
+    /// one step (the paper's Figure 1 measure): the Hausdorff and mean distances between the
+    /// two zero level sets, from SAMPLES area samples per surface (default 1000000) and every
+    /// vertex. Keeps every level's grid in memory.
+    #[arg(long, value_name = "SAMPLES", num_args = 0..=1, default_missing_value = "1000000")]
+    pub measure_rebuilds: Option<usize>,
 }
 
 #[derive(serde::Serialize)]
@@ -80,6 +90,12 @@ struct LevelJson {
     area: f64,
     /// Mean |κ| at the samples, in units of 1/h (decreasing as the levels get smoother).
     mean_abs_curvature: f64,
+    /// With `--measure-rebuilds`: Hausdorff(S_{i−1}, S̃_{i−1}), S̃_{i−1} rebuilt from φ_i, in h.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rebuild_hausdorff_h: Option<f64>,
+    /// With `--measure-rebuilds`: their mean distance, in h.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rebuild_mean_h: Option<f64>,
 }
 
 #[derive(serde::Serialize)]
@@ -124,11 +140,15 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
         args.output.display()
     );
     let velocity = Velocity::from_name(&velocity_name(args.velocity), args.c)?;
+    if args.measure_rebuilds == Some(0) {
+        anyhow::bail!("--measure-rebuilds needs at least 1 sample per surface");
+    }
     let mut opts = DecomposeOptions {
         levels: args.levels,
         time: args.time,
         velocity,
         dt: args.dt,
+        keep_level_sets: args.measure_rebuilds.is_some(),
         ..Default::default()
     };
     // The level count is checked before any work (the rest of the schedule needs h).
@@ -184,6 +204,15 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
     let msr = &d.msr;
 
     // Everything that can fail is computed before the first write.
+    let rebuilds = match args.measure_rebuilds {
+        Some(samples) => {
+            bar.set_message("measuring the rebuild of each level");
+            let measured = measure_level_rebuilds(&d, &SurfaceDistanceOptions { samples }, |_| {})
+                .map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
+            Some(measured)
+        }
+        None => None,
+    };
     bar.set_message("preparing the outputs");
     let scales: Vec<TriMesh> = if args.levels_dir.is_some() || args.figures.is_some() {
         (0..=msr.levels()).map(|k| msr.mesh_at(k)).collect()
@@ -256,6 +285,8 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
                 volume: r.volume,
                 area: r.area,
                 mean_abs_curvature: r.mean_abs_curvature * h,
+                rebuild_hausdorff_h: rebuilds.as_ref().map(|m| m[r.level - 1].hausdorff / h),
+                rebuild_mean_h: rebuilds.as_ref().map(|m| m[r.level - 1].mean_distance / h),
             })
             .collect(),
         output: args.output.display().to_string(),
@@ -279,13 +310,29 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
         out.samples,
         out.vertices
     );
+    let measured = rebuilds.is_some();
     println!(
-        "{:>5}  {:<11}  {:>10}  {:>8}  {:<14}  {:<14}  mean |κ|·h",
-        "level", "t", "mean |w|/h", "|w|<0.1h", "volume", "area"
+        "{:>5}  {:<11}  {:>10}  {:>8}  {:<14}  {:<14}  {:>10}{}",
+        "level",
+        "t",
+        "mean |w|/h",
+        "|w|<0.1h",
+        "volume",
+        "area",
+        "mean |κ|·h",
+        if measured {
+            "  Hausdorff(S_{i-1}, S̃_{i-1} from φ_i)/h, mean/h"
+        } else {
+            ""
+        }
     );
     for l in &out.levels {
+        let rebuild = match (l.rebuild_hausdorff_h, l.rebuild_mean_h) {
+            (Some(d), Some(m)) => format!("  {d:>38.3}  {m:.4}"),
+            _ => String::new(),
+        };
         println!(
-            "{:>5}  {:<11.5}  {:>10.4}  {:>7.1}%  {:<14.6}  {:<14.6}  {:.4}",
+            "{:>5}  {:<11.5}  {:>10.4}  {:>7.1}%  {:<14.6}  {:<14.6}  {:>10.4}{rebuild}",
             l.level,
             l.time,
             l.mean_abs_detail,

@@ -6,13 +6,15 @@
 //! `cover` the samples added where a level's surface has none near, `misread` those added where
 //! the level-set reconstruction would misread a level, `project` the Newton
 //! projection onto a zero level set (`rescue` for the points where it stalls), `extend` and
-//! `reconstruct` the reconstruction by the level set.
+//! `reconstruct` the reconstruction by the level set, `fidelity` how closely it gives back each
+//! level from the next.
 
 pub mod archive;
 pub mod buckets;
 pub mod cover;
 pub mod decompose;
 pub mod extend;
+pub mod fidelity;
 pub mod misread;
 pub mod project;
 pub mod reconstruct;
