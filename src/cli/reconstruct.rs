@@ -8,7 +8,8 @@
 //! ([`crate::msr::reconstruct::rebuild_from_tangent_planes`]: the semi-Lagrangian step with the
 //! samples' frames rotated, from X_{i−1} = X_i − W_i and their normals), and its zero level set
 //! extracted by marching cubes; each level's
-//! reconstruction S̃_{i−1} is compared with the exact S_{i−1} (the vertex reconstruction) by the
+//! reconstruction S̃_{i−1} (from S̃_i, as the archive keeps φ_T only: the steps' errors add up;
+//! `decompose --measure-rebuilds` gives the paper's one-step figure) is compared with the exact S_{i−1} (the vertex reconstruction) by the
 //! Hausdorff distance, reported in units of h, and the samples X_{i−1} (on S_{i−1}) by their
 //! distance to S̃_{i−1} (the Hausdorff distance also counts the chords of long original edges
 //! across a curved S_{i−1}, which are not errors of the reconstruction). A missing, damaged or
