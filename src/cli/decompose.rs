@@ -1,6 +1,7 @@
 //! `vesselmsr decompose MESH -o MSR.npz [--levels N] [--time T] [--velocity …] [--c C] [--dt DT]
-//! [grid flags] [--levels-dir DIR] [--figures DIR] [--measure-rebuilds [SAMPLES]]`: the multiscale representation of a mesh
-//! (paper Algorithm 1, [`crate::msr::decompose`]) written as one `.npz` archive.
+//! [grid flags] [--levels-dir DIR] [--figures DIR] [--measure-rebuilds [SAMPLES]]`: the
+//! multiscale representation of a mesh (paper Algorithm 1, [`crate::msr::decompose`]) written
+//! as one `.npz` archive.
 //!
 //! The mesh is voxelized, the grid padded for the motion (as `evolve` does), and the levels
 //! t_i = i·T/N computed by the chosen motion (default `vpmcf`, the paper's Figure 1). Optional
@@ -206,9 +207,14 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
     // Everything that can fail is computed before the first write.
     let rebuilds = match args.measure_rebuilds {
         Some(samples) => {
-            bar.set_message("measuring the rebuild of each level");
-            let measured = measure_level_rebuilds(&d, &SurfaceDistanceOptions { samples }, |_| {})
-                .map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
+            bar.set_message(format!("measuring the rebuild of level 1/{levels}"));
+            let measured = measure_level_rebuilds(&d, &SurfaceDistanceOptions { samples }, |i| {
+                bar.set_message(format!(
+                    "measuring the rebuild of level {}/{levels}",
+                    (i + 1).min(levels)
+                ));
+            })
+            .map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
             Some(measured)
         }
         None => None,

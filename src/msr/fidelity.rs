@@ -1,7 +1,7 @@
 //! How closely the level-set reconstruction gives back each level from the next: the paper's
-//! Figure 1 measure (Section 4), Hausdorff(S_{i−1}, S̃_{i−1}) with S̃_{i−1} rebuilt from the
-//! exact φ_i and the details W_i in one step ([`super::reconstruct::rebuild_from_tangent_planes`]),
-//! both surfaces the marching-cubes zero level sets of their grids. The decomposition has every
+//! Figure 1 measure, Hausdorff(S_{i−1}, S̃_{i−1}) with S̃_{i−1} rebuilt from the exact φ_i and
+//! the details W_i in one step ([`super::reconstruct::rebuild_from_tangent_planes`]), both
+//! surfaces the marching-cubes zero level sets of their grids. The decomposition has every
 //! φ_i ([`super::decompose::DecomposeOptions::keep_level_sets`]); an archive keeps φ_T only, so
 //! its full reconstruction chains the steps from φ_T instead (`vesselmsr reconstruct`).
 
@@ -52,14 +52,14 @@ pub fn measure_level_rebuilds(
 mod tests {
     use super::*;
     use crate::grid::{grid_for_mesh, GridOptions};
-    use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
+    use crate::levelset::voxelize::voxelize;
     use crate::mesh::primitives::icosphere;
     use crate::msr::decompose::{decompose, DecomposeOptions};
     use nalgebra::Point3;
 
     /// A sphere's levels are spheres that shrink evenly under mean curvature flow: each rebuild
-    /// gives back the level before to a twentieth of a voxel (measured 0.008h). Without the level sets kept,
-    /// the measure is refused.
+    /// gives back the level before to a twentieth of a voxel (measured 0.008h). Without the
+    /// level sets kept, the measure is refused.
     #[test]
     fn sphere_levels_rebuild_closely_and_need_the_level_sets() {
         let mesh = icosphere(4, 1.0, Point3::origin());
@@ -71,13 +71,7 @@ mod tests {
             },
         )
         .unwrap();
-        let phi = voxelize(
-            &mesh,
-            spec.dims,
-            spec.transform,
-            &VoxelizeOptions::default(),
-        )
-        .unwrap();
+        let phi = voxelize(&mesh, spec.dims, spec.transform, &Default::default()).unwrap();
         let mut opts = DecomposeOptions {
             levels: 2,
             velocity: crate::motion::Velocity::MeanCurvature,

@@ -31,10 +31,11 @@ const LATERAL_REACH: f64 = 1.5;
 /// the node exceeds the nearest's by σ² weighs e^(−1/2) of it.
 const PLANE_SPREAD: f64 = 0.25;
 
-/// A sample whose normal line passes this near a node (voxels) is the node's foot point, whose
-/// plane gives the node its distance alone (no average, no clamp). The decomposition's samples
-/// for misread nodes are such ([`super::misread`]); another sample passes this near a node
-/// by chance only, and its plane is then as good a distance.
+/// A sample whose normal line passes this near a node (voxels), and which is no farther from it
+/// than the nearest sample by more than the coverage, is the node's foot point, whose plane
+/// gives the node its distance alone (no average, no clamp). The decomposition's samples for
+/// misread nodes are such ([`super::misread`]); another sample passes this near a node by
+/// chance only, and its plane is then as good a distance.
 const FOOT_LATERAL: f64 = 0.01;
 
 /// A node farther than this (voxels) beyond the largest detail of the samples around it from
