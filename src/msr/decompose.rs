@@ -348,10 +348,12 @@ fn project_with_rescue(
 /// Unit outward normals ∇φ/|∇φ| (tricubic) at `points`; zero where the gradient vanishes or the
 /// point is off the grid.
 fn outward_normals(phi: &Grid3, points: &[Point3<f64>]) -> Vec<Vector3<f64>> {
-    points
-        .par_iter()
-        .map(|p| unit_normal(phi, p).unwrap_or_else(Vector3::zeros))
-        .collect()
+    points.par_iter().map(|p| outward_normal(phi, p)).collect()
+}
+
+/// [`outward_normals`] at one point.
+pub(super) fn outward_normal(phi: &Grid3, p: &Point3<f64>) -> Vector3<f64> {
+    unit_normal(phi, p).unwrap_or_else(Vector3::zeros)
 }
 
 /// Mean |∇·(∇φ/|∇φ|)| at `points` (central differences of the tricubic unit normal, step h/2);

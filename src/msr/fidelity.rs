@@ -72,16 +72,17 @@ mod tests {
         )
         .unwrap();
         let phi = voxelize(&mesh, spec.dims, spec.transform, &Default::default()).unwrap();
-        let mut opts = DecomposeOptions {
+        let opts = DecomposeOptions {
             levels: 2,
             velocity: crate::motion::Velocity::MeanCurvature,
+            keep_level_sets: true,
             ..Default::default()
         };
-        let without = decompose(&mesh, phi.clone(), &opts, |_, _| {}).unwrap();
+        let mut d = decompose(&mesh, phi, &opts, |_, _| {}).unwrap();
         let distance = SurfaceDistanceOptions { samples: 20_000 };
-        assert!(measure_level_rebuilds(&without, &distance, |_| {}).is_err());
-        opts.keep_level_sets = true;
-        let d = decompose(&mesh, phi, &opts, |_, _| {}).unwrap();
+        let kept = std::mem::take(&mut d.level_sets);
+        assert!(measure_level_rebuilds(&d, &distance, |_| {}).is_err());
+        d.level_sets = kept;
         let mut seen = Vec::new();
         let measured = measure_level_rebuilds(&d, &distance, |i| seen.push(i)).unwrap();
         assert_eq!(seen, [1, 2]);

@@ -23,7 +23,7 @@
 //! lies off the tricubic zero level set by about what φ_{i−1} there is off a distance (a tenth
 //! of a voxel); its detail W_i is still its projection onto S_i.
 
-use super::decompose::unit_normal;
+use super::decompose::{outward_normal, unit_normal};
 use super::project::{project_to_zero_level, LevelProjectOptions};
 use super::reconstruct::{AdvectOptions, TangentPlanes};
 use crate::grid::{face_neighbours, Grid3};
@@ -146,7 +146,7 @@ pub fn misread_points(
         .map(|(p, (node, _))| Misread {
             node,
             point: p.point,
-            normal: unit_normal(previous_phi, &p.point).unwrap_or_else(Vector3::zeros),
+            normal: outward_normal(previous_phi, &p.point),
         });
     // A face's corner: the point its own value places on S_{i−1}, |φ_{i−1}| away along its
     // normal, with that normal, so that the sample's plane gives the node exactly its value
