@@ -11,7 +11,7 @@ use crate::grid::Grid3;
 use std::collections::{BTreeMap, BTreeSet};
 
 /// What a branch's end is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EndKind {
     /// An open vessel end of the mesh (a boundary loop cut across the vessel).

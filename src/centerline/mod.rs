@@ -25,10 +25,10 @@ pub use extract::{compute_centerline, CenterlineOptions};
 pub use graph::EndKind;
 
 use nalgebra::{Point3, Vector3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// One branch: a curve between two ends (open vessel ends, closed ends or junctions).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Branch {
     /// Index in [`Centerline::branches`].
     pub id: usize,
@@ -37,12 +37,12 @@ pub struct Branch {
     /// Arc length, world units.
     pub length: f64,
     /// Points along the branch, world units.
-    #[serde(serialize_with = "ser_points")]
+    #[serde(serialize_with = "ser_points", deserialize_with = "de_points")]
     pub points: Vec<Point3<f64>>,
     /// Maximal inscribed radius at each point (−φ), world units.
     pub radius: Vec<f64>,
     /// Unit tangent at each point, from the first point towards the last.
-    #[serde(serialize_with = "ser_vectors")]
+    #[serde(serialize_with = "ser_vectors", deserialize_with = "de_vectors")]
     pub tangent: Vec<Vector3<f64>>,
     /// Kind of the first point.
     pub start: EndKind,
@@ -51,11 +51,11 @@ pub struct Branch {
 }
 
 /// A point where three or more branches meet.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Junction {
     pub id: usize,
     pub component: usize,
-    #[serde(serialize_with = "ser_point")]
+    #[serde(serialize_with = "ser_point", deserialize_with = "de_point")]
     pub position: Point3<f64>,
     /// Inscribed radius there, world units.
     pub radius: f64,
@@ -64,9 +64,9 @@ pub struct Junction {
 }
 
 /// A free end of the graph.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Endpoint {
-    #[serde(serialize_with = "ser_point")]
+    #[serde(serialize_with = "ser_point", deserialize_with = "de_point")]
     pub position: Point3<f64>,
     /// Inscribed radius there (an open end: the end loop's mean radius), world units.
     pub radius: f64,
@@ -77,7 +77,7 @@ pub struct Endpoint {
 }
 
 /// The centreline graph of a vessel mesh.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Centerline {
     /// Voxel of the grid it was computed on, world units.
     pub voxel: f64,
@@ -109,4 +109,19 @@ fn ser_points<S: serde::Serializer>(ps: &[Point3<f64>], s: S) -> Result<S::Ok, S
 fn ser_vectors<S: serde::Serializer>(vs: &[Vector3<f64>], s: S) -> Result<S::Ok, S::Error> {
     let v: Vec<[f64; 3]> = vs.iter().map(|p| [p.x, p.y, p.z]).collect();
     v.serialize(s)
+}
+
+fn de_point<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Point3<f64>, D::Error> {
+    let [x, y, z] = <[f64; 3]>::deserialize(d)?;
+    Ok(Point3::new(x, y, z))
+}
+
+fn de_points<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Point3<f64>>, D::Error> {
+    let v = Vec::<[f64; 3]>::deserialize(d)?;
+    Ok(v.into_iter().map(Point3::from).collect())
+}
+
+fn de_vectors<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Vector3<f64>>, D::Error> {
+    let v = Vec::<[f64; 3]>::deserialize(d)?;
+    Ok(v.into_iter().map(Vector3::from).collect())
 }

@@ -4,8 +4,10 @@
 //! length from the branch's start.
 //!
 //! A section is measured where it is one closed lumen around the point (`report::stenosis::
-//! cross_section` encloses it); it is left out (None) next to a junction (within 1.5 inscribed
-//! radii, where the plane cuts two lumens) and where the plane runs out through an open end.
+//! cross_section` encloses it) and roughly round (its equivalent diameter at most 1.6 times the
+//! inscribed one); it is left out (None) next to a junction (within 2 inscribed radii, where the
+//! plane cuts two lumens), where the plane runs out through an open end, and where it cuts a
+//! neighbouring branch or runs along the vessel.
 
 use super::{Branch, Centerline, EndKind};
 use crate::report::stenosis::cross_section;
@@ -34,6 +36,13 @@ pub struct BranchProfile {
     pub points: Vec<ProfilePoint>,
 }
 
+/// Sections within this many inscribed radii of a junction are not measured (dimensionless).
+const JUNCTION_ZONE: f64 = 2.0;
+/// A section whose equivalent diameter exceeds this multiple of the inscribed diameter is not one
+/// round lumen (it cuts into a neighbouring branch, or along the vessel); not measured
+/// (dimensionless).
+const MAX_ROUNDNESS: f64 = 1.6;
+
 /// The profiles of every branch of `centerline` on `mesh` (see the module docs).
 pub fn measure_profiles(mesh: &TriMesh, centerline: &Centerline) -> Vec<BranchProfile> {
     centerline
@@ -57,12 +66,14 @@ fn branch_profile(mesh: &TriMesh, b: &Branch) -> Vec<ProfilePoint> {
         let p = b.points[i];
         let near_junction = [(b.start, 0), (b.end, n - 1)].iter().any(|&(kind, k)| {
             kind == EndKind::Junction
-                && (p - b.points[k]).norm() < 1.5 * b.radius[k].max(b.radius[i])
+                && (p - b.points[k]).norm() < JUNCTION_ZONE * b.radius[k].max(b.radius[i])
         });
         let section = (!near_junction)
             .then(|| cross_section(mesh, &p, &b.tangent[i]))
             .flatten()
-            .filter(|c| c.encloses_point);
+            .filter(|c| {
+                c.encloses_point && c.equivalent_diameter <= MAX_ROUNDNESS * 2.0 * b.radius[i]
+            });
         out.push(ProfilePoint {
             s,
             position: [p.x, p.y, p.z],

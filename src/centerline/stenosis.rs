@@ -1,15 +1,15 @@
 //! Narrowings found automatically along each branch of a centreline, against a healthy reference
 //! diameter (as NASCET compares the narrowest lumen with the normal one).
 //!
-//! Per branch, on its equivalent-diameter profile (`profile`; the inscribed diameter where no
-//! section is measured is not used): the points within one inscribed radius of a closed or open
-//! end are left out (the wall turns there), the diameters are median-filtered over about one
+//! Per branch, on its equivalent-diameter profile (`profile`; points without a section are not
+//! used): the points within the branch's median radius of a closed or open end are left out
+//! (the wall turns there), the diameters are median-filtered over about one
 //! radius, and the healthy reference D_ref(s) = a + b·s is a robust straight-line fit: least
 //! squares, refitted on the points within −5%/+30% of the last fit (narrowings and dilations
 //! such as aneurysms leave the fit) until the kept set stops changing. A proximal and a distal
 //! healthy segment around a lesion thus set its reference, and a tapering vessel keeps its taper.
-//! The narrowing along the branch is 1 − D/D_ref; a lesion is a run of points where it exceeds
-//! half its own largest value, reported with its position (the narrowest point), minimum and
+//! The narrowing along the branch is 1 − D/D_ref; a lesion is a valley of it, deepest first (the
+//! run where it exceeds half the valley's peak, then on while it keeps falling away from it), reported with its position (the narrowest point), minimum and
 //! reference diameters, diameter stenosis (1 − D_min/D_ref) and area stenosis
 //! (1 − A_min/A_ref, A_ref = π D_ref²/4) in percent, and length (that run's arc length).
 
@@ -78,18 +78,18 @@ pub fn find_stenoses(
         let b = &centerline.branches[prof.branch];
         let n = prof.points.len();
         let total = prof.points.last().map_or(0.0, |p| p.s);
-        // Points away from the ends, with a section.
+        // Points away from the closed and open ends (by the branch's median radius), with a
+        // section.
+        let median_radius = {
+            let mut r = b.radius.clone();
+            r.sort_by(f64::total_cmp);
+            r.get(r.len() / 2).copied().unwrap_or(0.0)
+        };
         let idx: Vec<usize> = (0..n)
             .filter(|&i| {
                 let p = &prof.points[i];
-                let r = 0.5 * p.inscribed_diameter;
-                let from_start = p.s;
-                let from_end = total - p.s;
-                let near =
-                    |kind: EndKind, d: f64, rr: f64| kind != EndKind::Junction && d < rr.max(r);
-                p.equivalent_diameter.is_some()
-                    && !near(b.start, from_start, b.radius[0])
-                    && !near(b.end, from_end, *b.radius.last().unwrap_or(&0.0))
+                let near = |kind: EndKind, d: f64| kind != EndKind::Junction && d < median_radius;
+                p.equivalent_diameter.is_some() && !near(b.start, p.s) && !near(b.end, total - p.s)
             })
             .collect();
         let mut fig = BranchNarrowing {
@@ -166,7 +166,19 @@ pub fn find_stenoses(
             while hi + 1 < narrowing.len() && narrowing[hi + 1] > 0.5 * peak && !used[hi + 1] {
                 hi += 1;
             }
-            for u in used.iter_mut().take(hi + 1).skip(lo) {
+            // The whole valley is this lesion's: on from the half-peak run while the narrowing
+            // keeps falling away from the peak.
+            let (mut vlo, mut vhi) = (lo, hi);
+            while vlo > 0 && !used[vlo - 1] && narrowing[vlo - 1] <= narrowing[vlo] {
+                vlo -= 1;
+            }
+            while vhi + 1 < narrowing.len()
+                && !used[vhi + 1]
+                && narrowing[vhi + 1] <= narrowing[vhi]
+            {
+                vhi += 1;
+            }
+            for u in used.iter_mut().take(vhi + 1).skip(vlo) {
                 *u = true;
             }
             let i = idx[k];

@@ -6,8 +6,8 @@ use super::grid_args::GridArgs;
 use super::{print_json, progress, Context};
 use crate::centerline::extract::CenterlineTimings;
 use crate::centerline::{compute_centerline, Centerline, CenterlineOptions};
-use crate::io::{read_mesh, write_atomic};
-use crate::{Error, TriMesh};
+use crate::io::{read_centerline_json, read_mesh, write_centerline_json, write_centerline_vtp};
+use crate::TriMesh;
 use anyhow::Context as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -80,6 +80,33 @@ fn output_format(path: &Path) -> anyhow::Result<Format> {
     }
 }
 
+/// Where `profile` and `stenosis` get their centreline: a file, or computed from the mesh.
+#[derive(Debug, clap::Args)]
+pub struct CenterlineSource {
+    /// Input mesh (.stl, .obj or .ply).
+    pub mesh: PathBuf,
+    /// A centreline written by `vesselmsr centerline -o CL.json` (default: computed).
+    #[arg(long, value_name = "CL.json")]
+    pub centerline: Option<PathBuf>,
+    #[command(flatten)]
+    pub grid: GridArgs,
+}
+
+/// The mesh and its centreline, read from `--centerline` or computed (notices printed).
+pub fn centerline_for(
+    ctx: &Context,
+    src: &CenterlineSource,
+) -> anyhow::Result<(TriMesh, Centerline)> {
+    match &src.centerline {
+        Some(path) => Ok((read_mesh(&src.mesh)?, read_centerline_json(path)?)),
+        None => {
+            let (mesh, cl, _, _) = load_centerline(&src.mesh, &src.grid)?;
+            print_notices(ctx, &src.mesh, &cl);
+            Ok((mesh, cl))
+        }
+    }
+}
+
 /// Reads a mesh and computes its centreline with the grid flags, errors naming the file.
 pub fn load_centerline(
     mesh_path: &Path,
@@ -116,11 +143,8 @@ pub fn run(ctx: &Context, args: &CenterlineArgs) -> anyhow::Result<()> {
     let t = Instant::now();
     if let (Some(path), Some(format)) = (&args.output, format) {
         match format {
-            Format::Json => write_atomic(path, |out| {
-                serde_json::to_writer(&mut *out, &cl)
-                    .map_err(|e| Error::format(path, format!("cannot write JSON: {e}")))
-            })?,
-            Format::Vtp => write_vtp(path, &cl)?,
+            Format::Json => write_centerline_json(path, &cl)?,
+            Format::Vtp => write_centerline_vtp(path, &cl)?,
         }
     }
     let write_s = t.elapsed().as_secs_f64();
@@ -178,9 +202,4 @@ pub fn run(ctx: &Context, args: &CenterlineArgs) -> anyhow::Result<()> {
         println!("wrote {}", p.display());
     }
     Ok(())
-}
-
-fn write_vtp(path: &Path, cl: &Centerline) -> anyhow::Result<()> {
-    let _ = cl;
-    anyhow::bail!("{}: .vtp output is not available yet", path.display())
 }

@@ -10,10 +10,12 @@ mod evolve;
 mod grid_args;
 mod info;
 mod phantom;
+mod profile;
 mod progress;
 mod reconstruct;
 mod remesh;
 mod repair;
+mod stenosis;
 mod voxelize;
 
 use clap::{Parser, Subcommand};
@@ -69,6 +71,12 @@ pub enum Command {
     /// Repair damaged regions of a vessel (chopped wall, hole, narrowing, occlusion) by
     /// inpainting; writes a watertight mesh and reports the inpainted volume and stenosis.
     Repair(repair::RepairArgs),
+    /// Equivalent (cross-section) and inscribed diameters along every centreline branch, as CSV
+    /// and optionally a plot.
+    Profile(profile::ProfileArgs),
+    /// Narrowings found automatically along every centreline branch against the healthy
+    /// diameter: position, minimum and reference diameter, diameter and area stenosis, length.
+    Stenosis(stenosis::StenosisArgs),
     /// Synthetic damaged vessel (tube, curved, bifurcation, stenosis or occlusion) with its
     /// intact truth and the regions D covering the damage: test data for inpainting.
     Phantom(phantom::PhantomArgs),
@@ -121,6 +129,8 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Reconstruct(args) => reconstruct::run(&ctx, &args),
         Command::Repair(args) => repair::run(&ctx, &args),
         Command::Phantom(args) => phantom::run(&ctx, &args),
+        Command::Profile(args) => profile::run(&ctx, &args),
+        Command::Stenosis(args) => stenosis::run(&ctx, &args),
     }
 }
 

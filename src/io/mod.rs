@@ -10,6 +10,7 @@
 //! VTK ImageData `.vti` (`vti`, for ParaView) and as NRRD (`nrrd`, for 3D Slicer and ITK).
 
 mod atomic;
+mod centerline;
 mod npy;
 mod npz;
 mod nrrd;
@@ -22,6 +23,7 @@ mod vti;
 mod vtp;
 
 pub use atomic::write_atomic;
+pub use centerline::{read_centerline_json, write_centerline_json, write_centerline_vtp};
 pub use npy::{npy_sidecar_path, read_npy, write_npy, NpySidecar};
 pub use npz::{read_npz, write_npz, NpyArray, NpyData};
 pub use nrrd::{read_nrrd, write_nrrd};

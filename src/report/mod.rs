@@ -7,6 +7,7 @@
 pub mod colormap;
 pub mod histogram;
 pub mod image;
+pub mod profile_plot;
 mod raster;
 pub mod render;
 pub mod repair_picture;

@@ -1,0 +1,69 @@
+//! `vesselmsr stenosis MESH [--centerline CL.json] [--min-degree P] [--json]`: narrowings found
+//! automatically along every branch of the centreline, against a robust fit of the healthy
+//! diameter (see `centerline::stenosis`).
+
+use super::centerline::{centerline_for, CenterlineSource};
+use super::{print_json, progress, Context};
+use crate::centerline::profile::measure_profiles;
+use crate::centerline::stenosis::{find_stenoses, StenosisFindOptions};
+
+#[derive(Debug, clap::Args)]
+pub struct StenosisArgs {
+    #[command(flatten)]
+    pub source: CenterlineSource,
+    /// Smallest diameter stenosis reported as a lesion, percent.
+    #[arg(long, value_name = "P", default_value_t = StenosisFindOptions::default().min_degree_pct)]
+    pub min_degree: f64,
+}
+
+pub fn run(ctx: &Context, args: &StenosisArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.min_degree.is_finite() && (0.0..100.0).contains(&args.min_degree),
+        "--min-degree must be a percentage from 0 to below 100, got {}",
+        args.min_degree
+    );
+    let bar = progress::spinner(ctx.quiet, "searching for narrowings");
+    let (mesh, cl) = centerline_for(ctx, &args.source)?;
+    let profiles = measure_profiles(&mesh, &cl);
+    let opts = StenosisFindOptions {
+        min_degree_pct: args.min_degree,
+    };
+    let (lesions, branches) = find_stenoses(&cl, &profiles, &opts);
+    bar.finish_and_clear();
+    if ctx.json {
+        return print_json(&serde_json::json!({
+            "mesh": args.source.mesh,
+            "voxel": cl.voxel,
+            "min_degree_pct": args.min_degree,
+            "lesions": lesions,
+            "branches": branches,
+        }));
+    }
+    println!("{}", args.source.mesh.display());
+    if lesions.is_empty() {
+        println!(
+            "no narrowing of {}% or more (largest: {:.1}%)",
+            args.min_degree,
+            branches
+                .iter()
+                .map(|b| b.max_narrowing_pct)
+                .fold(0.0, f64::max)
+        );
+    }
+    for l in &lesions {
+        println!(
+            "branch {} at ({:.4}, {:.4}, {:.4}), s = {:.4}: diameter {:.4} against {:.4} healthy: {:.1}% diameter, {:.1}% area stenosis, length {:.4}",
+            l.branch,
+            l.position[0],
+            l.position[1],
+            l.position[2],
+            l.s,
+            l.min_diameter,
+            l.reference_diameter,
+            l.diameter_stenosis_pct,
+            l.area_stenosis_pct,
+            l.length
+        );
+    }
+    Ok(())
+}
