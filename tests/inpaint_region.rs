@@ -123,7 +123,7 @@ fn read_regions_balls_and_points() {
         "r.json",
         r#"{"regions": [{"center": [0, 3, 10], "radius": 2}], "points": [[3.2, 0, 15], [0, -3, 20]]}"#,
     );
-    let balls = read_regions(&p, &mesh).unwrap();
+    let balls = read_regions(&p, &mesh, &|_| None).unwrap();
     assert_eq!(balls.len(), 3);
     assert_eq!(
         balls[0],
@@ -144,11 +144,11 @@ fn read_regions_balls_and_points() {
 
     // Points only.
     let p = write(dir.path(), "p.json", r#"{"points": [[0, 3, 5]]}"#);
-    assert_eq!(read_regions(&p, &mesh).unwrap().len(), 1);
+    assert_eq!(read_regions(&p, &mesh, &|_| None).unwrap().len(), 1);
     // Balls only, as write_regions writes them.
     let out = dir.path().join("w.json");
     vesselmsr::inpaint::region::write_regions(&out, &balls).unwrap();
-    assert_eq!(read_regions(&out, &mesh).unwrap(), balls);
+    assert_eq!(read_regions(&out, &mesh, &|_| None).unwrap(), balls);
 }
 
 #[test]
@@ -181,12 +181,12 @@ fn read_regions_errors() {
     ];
     for (name, text, word) in cases {
         let p = write(dir.path(), name, text);
-        let e = err_text(read_regions(&p, &mesh));
+        let e = err_text(read_regions(&p, &mesh, &|_| None));
         assert!(e.contains(word), "{name}: {e}");
         assert!(e.contains(name), "{name}: {e}");
     }
     let missing = dir.path().join("missing.json");
-    assert!(err_text(read_regions(&missing, &mesh)).contains("missing.json"));
+    assert!(err_text(read_regions(&missing, &mesh, &|_| None)).contains("missing.json"));
 }
 
 #[test]

@@ -414,6 +414,7 @@ fn real_coronary_stenosis_gets_a_tube_like_lumen_and_a_degree() {
         &r.mesh,
         &[ball],
         &["region".into()],
+        None,
     );
     let g = &reports[0];
     println!(

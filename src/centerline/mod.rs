@@ -16,6 +16,7 @@
 
 pub mod extract;
 pub mod graph;
+pub mod healthy;
 pub mod profile;
 pub mod refine;
 pub mod skeleton;

@@ -75,11 +75,12 @@ pub fn refine_branch(
         if ends[side] != EndKind::End || pts.len() < 3 {
             continue;
         }
-        if side == 1 {
+        // trim_and_extend works on the last point: bring the first one there.
+        if side == 0 {
             pts.reverse();
         }
         trim_and_extend(phi, bvh, &mut pts, spacing);
-        if side == 1 {
+        if side == 0 {
             pts.reverse();
         }
     }

@@ -3,6 +3,9 @@
 //! write the repaired watertight mesh, and report the inpainted volume and the stenosis per region.
 
 use super::{print_json, progress, Context};
+use crate::centerline::healthy::HealthyVessel;
+use crate::centerline::stenosis::StenosisFindOptions;
+use crate::centerline::{compute_centerline, CenterlineOptions};
 use crate::inpaint::holes::{hole_regions, LoopKind, LoopOptions};
 use crate::inpaint::region::{parse_ball, read_regions, validate_regions, Ball};
 use crate::inpaint::repair::{repair, InpaintMethod, RepairOptions};
@@ -29,14 +32,19 @@ pub struct RepairArgs {
     #[arg(long, value_name = "x,y,z,r", allow_hyphen_values = true)]
     pub region: Vec<String>,
     /// A JSON regions file: {"regions": [{"center": [x, y, z], "radius": r}, ...], "points":
-    /// [[x, y, z], ...]}; each picked surface point becomes a ball sized from the local vessel
-    /// radius.
+    /// [[x, y, z], ...]}; each picked surface point becomes a ball of 1.5 healthy vessel radii
+    /// (the centreline's healthy reference there; else the local radius).
     #[arg(long, value_name = "FILE.json")]
     pub regions: Option<PathBuf>,
     /// Every boundary loop of the input that is not an open vessel end (a near-planar loop across
     /// the vessel) becomes a region.
     #[arg(long)]
     pub holes: bool,
+    /// Also repair every narrowing the centreline finds of at least P% diameter stenosis
+    /// (default 20): a ball on the centreline at the narrowest point, 1.5 healthy radii or half
+    /// the lesion's length plus one, the larger.
+    #[arg(long, value_name = "P", num_args = 0..=1, default_missing_value = "20")]
+    pub stenoses: Option<f64>,
     /// Voxel size h of the grid around D, world units (default: the voxelize rule on the whole
     /// mesh, min(mean edge / 2, longest side / 256)).
     #[arg(long, value_name = "H")]
@@ -152,9 +160,15 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
         );
     }
     anyhow::ensure!(
-        !args.region.is_empty() || args.regions.is_some() || args.holes,
-        "no region to repair: give --region x,y,z,r, --regions FILE.json or --holes"
+        !args.region.is_empty() || args.regions.is_some() || args.holes || args.stenoses.is_some(),
+        "no region to repair: give --region x,y,z,r, --regions FILE.json, --holes or --stenoses"
     );
+    if let Some(p) = args.stenoses {
+        anyhow::ensure!(
+            p.is_finite() && (0.0..100.0).contains(&p),
+            "--stenoses must be a percentage from 0 to below 100, got {p}"
+        );
+    }
     let mut balls: Vec<Ball> = Vec::new();
     let mut sources: Vec<String> = Vec::new();
     for text in &args.region {
@@ -163,10 +177,47 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
     }
     let mesh = read_mesh(&args.mesh)?;
     let read_secs = start.elapsed().as_secs_f64();
+    // The input's centreline: healthy radii for picked points, detected narrowings, and the
+    // stenosis measured along it in the report.
+    let centerline_start = Instant::now();
+    let healthy = match compute_centerline(&mesh, &CenterlineOptions::default()) {
+        Ok((cl, _)) => Some(HealthyVessel::new(
+            &mesh,
+            cl,
+            &StenosisFindOptions::default(),
+        )),
+        Err(e) => {
+            if !ctx.quiet {
+                eprintln!(
+                    "vesselmsr: notice: {}: no centreline ({e}); regions are sized and measured without it",
+                    args.mesh.display()
+                );
+            }
+            None
+        }
+    };
+    let centerline_secs = centerline_start.elapsed().as_secs_f64();
     if let Some(path) = &args.regions {
-        for b in read_regions(path, &mesh)? {
+        let radius = |p: &nalgebra::Point3<f64>| healthy.as_ref().and_then(|h| h.healthy_radius(p));
+        for b in read_regions(path, &mesh, &radius)? {
             balls.push(b);
             sources.push(format!("regions file {}", path.display()));
+        }
+    }
+    if let Some(p) = args.stenoses {
+        let found = healthy
+            .as_ref()
+            .map(|h| h.lesion_regions(p))
+            .unwrap_or_default();
+        if found.is_empty() && !ctx.quiet {
+            eprintln!(
+                "vesselmsr: notice: {}: no narrowing of {p}% or more found",
+                args.mesh.display()
+            );
+        }
+        for b in found {
+            balls.push(b);
+            sources.push("detected stenosis".into());
         }
     }
     let mut loops = Vec::new();
@@ -209,12 +260,19 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}: repair failed", args.mesh.display()))?;
     bar.set_message("measuring");
     let measure_start = Instant::now();
-    let regions = region_reports(&result.closed_input, &result.mesh, &balls, &sources);
+    let regions = region_reports(
+        &result.closed_input,
+        &result.mesh,
+        &balls,
+        &sources,
+        healthy.as_ref(),
+    );
     let info = mesh_info(&result.mesh);
     let input_info = mesh_info(&result.closed_input);
     let measure_secs = measure_start.elapsed().as_secs_f64();
     let mut timings = serde_json::Map::new();
     timings.insert("read".into(), read_secs.into());
+    timings.insert("centerline".into(), centerline_secs.into());
     for (name, secs) in &result.timings {
         timings.insert(name.clone(), (*secs).into());
     }

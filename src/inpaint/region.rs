@@ -6,9 +6,11 @@
 //! Both keys are optional; at least one region must result.
 //!
 //! A picked point becomes a ball centred on the surface point nearest to it, of radius
-//! [`PICKED_RADIUS_FACTOR`] × the local vessel radius there ([`local_vessel_radius`]: half the
-//! median length of a fan of inward chords, the ray-cast estimate of the vessel's inscribed
-//! radius). Balls also come from the command line (`--region x,y,z,r`, [`parse_ball`]) and are
+//! [`PICKED_RADIUS_FACTOR`] × the healthy vessel radius there when the caller knows it (the
+//! repair gives the centreline's healthy reference, `centerline::healthy`, so a point picked in
+//! a narrowing is sized by the healthy vessel, not by the narrowed lumen), else the local vessel
+//! radius ([`local_vessel_radius`]: half the median length of a fan of inward chords, the
+//! ray-cast estimate of the vessel's inscribed radius). Balls also come from the command line (`--region x,y,z,r`, [`parse_ball`]) and are
 //! checked against the mesh before use ([`validate_regions`]).
 
 use crate::bvh::MeshBvh;
@@ -222,9 +224,13 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Reads a regions file (see the module docs) for `mesh`: its balls first, then one ball per
 /// picked point, centred on the surface point nearest to it with radius [`PICKED_RADIUS_FACTOR`]
-/// × [`local_vessel_radius`] there. Unknown keys, malformed JSON, a point where no vessel radius
+/// × `healthy(point)`, or × [`local_vessel_radius`] there where that gives None. Unknown keys, malformed JSON, a point where no vessel radius
 /// can be estimated and a file listing no region at all are errors naming the file.
-pub fn read_regions(path: &Path, mesh: &TriMesh) -> Result<Vec<Ball>> {
+pub fn read_regions(
+    path: &Path,
+    mesh: &TriMesh,
+    healthy: &dyn Fn(&Point3<f64>) -> Option<f64>,
+) -> Result<Vec<Ball>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let file: RegionsFile = serde_json::from_str(&text)
         .map_err(|e| Error::format(path, format!("not a regions file: {e}")))?;
@@ -246,18 +252,20 @@ pub fn read_regions(path: &Path, mesh: &TriMesh) -> Result<Vec<Ball>> {
         for (k, q) in file.points.iter().enumerate() {
             let q = Point3::from(*q);
             let snapped = bvh.closest_point(&q).point;
-            let r = local_vessel_radius(mesh, &bvh, &snapped).ok_or_else(|| {
-                Error::format(
-                    path,
-                    format!(
-                        "point {} ({}, {}, {}): cannot estimate the vessel radius there",
-                        k + 1,
-                        q.x,
-                        q.y,
-                        q.z
-                    ),
-                )
-            })?;
+            let r = healthy(&snapped)
+                .or_else(|| local_vessel_radius(mesh, &bvh, &snapped))
+                .ok_or_else(|| {
+                    Error::format(
+                        path,
+                        format!(
+                            "point {} ({}, {}, {}): cannot estimate the vessel radius there",
+                            k + 1,
+                            q.x,
+                            q.y,
+                            q.z
+                        ),
+                    )
+                })?;
             balls.push(Ball {
                 center: snapped,
                 radius: PICKED_RADIUS_FACTOR * r,

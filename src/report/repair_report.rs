@@ -5,6 +5,7 @@
 
 use super::stenosis::{measure_stenosis_with, volume_in_ball_with, StenosisOptions};
 use crate::bvh::{WindingNumber, WindingOptions};
+use crate::centerline::healthy::HealthyVessel;
 use crate::inpaint::region::Ball;
 use crate::mesh::info::MeshInfo;
 use crate::mesh::measures::signed_volume;
@@ -32,13 +33,23 @@ pub struct RegionReport {
     pub input_volume_in_region: f64,
     /// Volume of the output inside D, world units³.
     pub output_volume_in_region: f64,
-    /// (1 − min input diameter / output diameter at that section) × 100; None when no
-    /// cross-section of the vessel could be taken in D.
+    /// (1 − min input diameter / healthy diameter) × 100 ("centerline": the healthy reference
+    /// of the input's centreline at the narrowest point; "sections": the output's diameter at
+    /// the input's narrowest section in D); None when no cross-section could be taken in D.
     pub diameter_stenosis_pct: Option<f64>,
-    /// (1 − min input area / output area at that section) × 100.
+    /// (1 − min input area / healthy area) × 100, the healthy area as the diameter's.
     pub area_stenosis_pct: Option<f64>,
-    /// (1 − min input diameter / diameter of the adjacent normal segment outside D) × 100.
+    /// (1 − min input diameter / normal diameter) × 100: the healthy reference of the
+    /// centreline, fitted over the proximal and distal segments (`stenosis_method` "centerline";
+    /// then equal to `diameter_stenosis_pct`), or the input's diameter of the adjacent normal
+    /// segments just outside D ("sections").
     pub nascet_stenosis_pct: Option<f64>,
+    /// The healthy diameter of the NASCET figure, world units.
+    pub reference_diameter: Option<f64>,
+    /// How the stenosis was measured: "centerline" (along the input's centreline, independent of
+    /// the region's size) or "sections" (across D along the output's local axis, where no
+    /// centreline point with a measured section lies in D).
+    pub stenosis_method: Option<&'static str>,
     /// Smallest equivalent diameter of the input's lumen in D, world units.
     pub min_input_diameter: Option<f64>,
     /// Equivalent diameter of the output at the same section, world units.
@@ -69,12 +80,14 @@ pub fn surface_measures(info: &MeshInfo) -> SurfaceMeasures {
 }
 
 /// The per-region figures for `balls` (with their `sources`), `input` being the measured input
-/// (capped) and `output` the repaired mesh.
+/// (capped) and `output` the repaired mesh; the stenosis along `healthy` (the input's centreline)
+/// where it has measured points in the region, else across the region's sections.
 pub fn region_reports(
     input: &TriMesh,
     output: &TriMesh,
     balls: &[Ball],
     sources: &[String],
+    healthy: Option<&HealthyVessel>,
 ) -> Vec<RegionReport> {
     let opts = WindingOptions::default();
     let win_in = WindingNumber::new(input, opts);
@@ -86,22 +99,8 @@ pub fn region_reports(
         .map(|(k, ball)| {
             let vin = volume_in_ball_with(input, &win_in, ball);
             let vout = volume_in_ball_with(output, &win_out, ball);
-            let stenosis = measure_stenosis_with(
-                input,
-                &win_in,
-                output,
-                &win_out,
-                ball,
-                &StenosisOptions {
-                    normal_offset: NASCET_OFFSET,
-                    ..StenosisOptions::default()
-                },
-            );
-            let (s, note) = match stenosis {
-                Ok(s) => (Some(s), None),
-                Err(e) => (None, Some(e.to_string())),
-            };
-            RegionReport {
+            let along = healthy.and_then(|h| h.measure_in(output, ball));
+            let mut report = RegionReport {
                 center: [ball.center.x, ball.center.y, ball.center.z],
                 radius: ball.radius,
                 source: sources.get(k).cloned().unwrap_or_else(|| "region".into()),
@@ -113,13 +112,49 @@ pub fn region_reports(
                 },
                 input_volume_in_region: vin,
                 output_volume_in_region: vout,
-                diameter_stenosis_pct: s.as_ref().map(|s| s.diameter_stenosis_pct),
-                area_stenosis_pct: s.as_ref().map(|s| s.area_stenosis_pct),
-                nascet_stenosis_pct: s.as_ref().and_then(|s| s.nascet_stenosis_pct),
-                min_input_diameter: s.as_ref().map(|s| s.min_input_diameter),
-                output_diameter_at_min: s.as_ref().map(|s| s.output_diameter_at_min),
-                stenosis_note: note,
+                diameter_stenosis_pct: None,
+                area_stenosis_pct: None,
+                nascet_stenosis_pct: None,
+                reference_diameter: None,
+                stenosis_method: None,
+                min_input_diameter: None,
+                output_diameter_at_min: None,
+                stenosis_note: None,
+            };
+            if let Some(a) = along {
+                report.diameter_stenosis_pct = Some(a.diameter_stenosis_pct);
+                report.area_stenosis_pct = Some(a.area_stenosis_pct);
+                report.nascet_stenosis_pct = Some(a.diameter_stenosis_pct);
+                report.reference_diameter = Some(a.reference_diameter);
+                report.stenosis_method = Some("centerline");
+                report.min_input_diameter = Some(a.min_input_diameter);
+                report.output_diameter_at_min = a.output_diameter;
+                return report;
             }
+            let stenosis = measure_stenosis_with(
+                input,
+                &win_in,
+                output,
+                &win_out,
+                ball,
+                &StenosisOptions {
+                    normal_offset: NASCET_OFFSET,
+                    ..StenosisOptions::default()
+                },
+            );
+            match stenosis {
+                Ok(s) => {
+                    report.diameter_stenosis_pct = Some(s.diameter_stenosis_pct);
+                    report.area_stenosis_pct = Some(s.area_stenosis_pct);
+                    report.nascet_stenosis_pct = s.nascet_stenosis_pct;
+                    report.reference_diameter = s.normal_diameter;
+                    report.stenosis_method = Some("sections");
+                    report.min_input_diameter = Some(s.min_input_diameter);
+                    report.output_diameter_at_min = Some(s.output_diameter_at_min);
+                }
+                Err(e) => report.stenosis_note = Some(e.to_string()),
+            }
+            report
         })
         .collect()
 }

@@ -1,0 +1,157 @@
+//! The healthy vessel around a damaged region, from the centreline of the damaged input: the
+//! healthy radius at a point (to size a region D from it, not from a narrowed lumen), the
+//! narrowings the centreline finds (regions D of their own), and the stenosis inside a region
+//! measured along the centreline, so that it does not depend on how large the region was drawn.
+//!
+//! The healthy diameter is the robust reference line of `stenosis` (least squares refitted on the
+//! points within −5%/+30% of the fit) of the branch nearest the point. Inside a ball D the
+//! narrowest measured input section along the centreline (against the healthy reference) gives
+//! the minimum diameter D_min; the diameter stenosis is 1 − D_min/D_ref and the area stenosis
+//! 1 − A_min/(π D_ref²/4), with D_ref the healthy reference there (fitted over the proximal and
+//! distal healthy segments, as NASCET takes the normal lumen beyond the lesion); the NASCET
+//! figure is that diameter stenosis. The output's section at the same point and direction is
+//! reported beside them (how much of the lumen the repair restored).
+
+use super::profile::{measure_profiles, BranchProfile};
+use super::stenosis::{find_stenoses, BranchNarrowing, Lesion, StenosisFindOptions};
+use super::Centerline;
+use crate::inpaint::region::Ball;
+use crate::report::stenosis::cross_section;
+use crate::TriMesh;
+use nalgebra::Point3;
+use serde::Serialize;
+
+/// A centreline with its diameter profiles and healthy reference lines.
+pub struct HealthyVessel {
+    pub centerline: Centerline,
+    pub profiles: Vec<BranchProfile>,
+    pub narrowing: Vec<BranchNarrowing>,
+    pub lesions: Vec<Lesion>,
+}
+
+/// The stenosis inside one region, along the centreline.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RegionStenosis {
+    pub branch: usize,
+    /// The narrowest input section's centreline point, world units.
+    pub position: [f64; 3],
+    /// Equivalent diameter of the input there, world units.
+    pub min_input_diameter: f64,
+    /// Equivalent diameter of the output at the same section, world units (None: no section).
+    pub output_diameter: Option<f64>,
+    /// Healthy reference diameter there, world units.
+    pub reference_diameter: f64,
+    /// (1 − input / reference diameter) × 100.
+    pub diameter_stenosis_pct: f64,
+    /// (1 − input area / reference area) × 100.
+    pub area_stenosis_pct: f64,
+}
+
+impl HealthyVessel {
+    /// Profiles and reference lines of `centerline` on `mesh` (the input it was traced on).
+    pub fn new(mesh: &TriMesh, centerline: Centerline, opts: &StenosisFindOptions) -> Self {
+        let profiles = measure_profiles(mesh, &centerline);
+        let (lesions, narrowing) = find_stenoses(&centerline, &profiles, opts);
+        HealthyVessel {
+            centerline,
+            profiles,
+            narrowing,
+            lesions,
+        }
+    }
+
+    /// The centreline point nearest to `p`: (branch, point index, distance).
+    fn nearest(&self, p: &Point3<f64>) -> Option<(usize, usize, f64)> {
+        let mut best: Option<(usize, usize, f64)> = None;
+        for b in &self.centerline.branches {
+            for (i, q) in b.points.iter().enumerate() {
+                let d = (q - p).norm();
+                if best.is_none_or(|x| d < x.2) {
+                    best = Some((b.id, i, d));
+                }
+            }
+        }
+        best
+    }
+
+    /// The healthy reference diameter of `branch` at its point `i` (None without a fit).
+    fn reference_at(&self, branch: usize, i: usize) -> Option<f64> {
+        let [a, b] = self
+            .narrowing
+            .iter()
+            .find(|n| n.branch == branch)?
+            .reference_fit?;
+        let s = self
+            .profiles
+            .iter()
+            .find(|p| p.branch == branch)?
+            .points
+            .get(i)?
+            .s;
+        Some(a + b * s).filter(|d| *d > 0.0)
+    }
+
+    /// The healthy vessel radius next to the surface point `p`: half the reference diameter at
+    /// the nearest centreline point, when `p` lies within twice that radius of it.
+    pub fn healthy_radius(&self, p: &Point3<f64>) -> Option<f64> {
+        let (b, i, d) = self.nearest(p)?;
+        let r = 0.5 * self.reference_at(b, i)?;
+        (d <= 2.0 * r).then_some(r)
+    }
+
+    /// One ball per lesion of at least `min_degree_pct`: on the centreline at the narrowest point,
+    /// radius 1.5 healthy radii or half the lesion's length plus one healthy radius, the larger.
+    pub fn lesion_regions(&self, min_degree_pct: f64) -> Vec<Ball> {
+        self.lesions
+            .iter()
+            .filter(|l| l.diameter_stenosis_pct >= min_degree_pct)
+            .map(|l| {
+                let r = 0.5 * l.reference_diameter;
+                Ball {
+                    center: Point3::from(l.position),
+                    radius: (1.5 * r).max(0.5 * l.length + r),
+                }
+            })
+            .collect()
+    }
+
+    /// The stenosis inside `ball` along the centreline (see the module docs): over the measured
+    /// centreline points inside the ball, the one where the input is narrowest against its
+    /// healthy reference. None when no measured point lies in the ball.
+    pub fn measure_in(&self, output: &TriMesh, ball: &Ball) -> Option<RegionStenosis> {
+        let mut best: Option<(f64, usize, usize, f64, f64)> = None;
+        for prof in &self.profiles {
+            let b = &self.centerline.branches[prof.branch];
+            for (i, pp) in prof.points.iter().enumerate() {
+                let Some(d) = pp.equivalent_diameter else {
+                    continue;
+                };
+                if !ball.contains(&b.points[i]) {
+                    continue;
+                }
+                let Some(dref) = self.reference_at(prof.branch, i) else {
+                    continue;
+                };
+                let ratio = d / dref;
+                if best.is_none_or(|x| ratio < x.0) {
+                    best = Some((ratio, prof.branch, i, d, dref));
+                }
+            }
+        }
+        let (_, branch, i, dmin, dref) = best?;
+        let b = &self.centerline.branches[branch];
+        let p = b.points[i];
+        let out = cross_section(output, &p, &b.tangent[i]).filter(|c| c.encloses_point);
+        let area_in = self.profiles.iter().find(|q| q.branch == branch)?.points[i].area?;
+        Some(RegionStenosis {
+            branch,
+            position: [p.x, p.y, p.z],
+            min_input_diameter: dmin,
+            output_diameter: out.as_ref().map(|c| c.equivalent_diameter),
+            reference_diameter: dref,
+            diameter_stenosis_pct: (1.0 - dmin / dref) * 100.0,
+            area_stenosis_pct: (1.0 - area_in / (std::f64::consts::FRAC_PI_4 * dref * dref))
+                * 100.0,
+        })
+    }
+}
