@@ -10,6 +10,7 @@ use common::*;
 use nalgebra::Point3;
 use std::io::Write;
 use std::path::Path;
+use std::process::Command;
 use vesselmsr::io::*;
 use vesselmsr::{Error, TriMesh};
 
@@ -101,8 +102,14 @@ fn vtk_legacy_round_trip() {
     write_vtk_legacy(&path, &pd).unwrap();
     let text = std::fs::read(&path).unwrap();
     assert!(text.starts_with(b"# vtk DataFile Version 4.2\nvesselmsr\nBINARY\nDATASET POLYDATA\n"));
-    // The name with spaces and '%' is escaped, the 5-component array goes in a FIELD.
-    assert!(text.windows(24).any(|w| w == b"v%20&%20<w>%20100%25 dou"));
+    // The first array is the active SCALARS, the others in a FIELD; names with spaces and '%'
+    // are escaped.
+    assert!(text
+        .windows(40)
+        .any(|w| w == b"SCALARS inpainted unsigned_char 1\nLOOKUP"));
+    assert!(text
+        .windows(32)
+        .any(|w| w == b"v%20&%20<w>%20100%25 2 4 double\n"));
     assert!(text.windows(17).any(|w| w == b"five 5 4 float\n\x00\x00"));
     assert_eq!(read_vtk_legacy(&path).unwrap(), pd);
 }
@@ -683,4 +690,94 @@ fn malformed_vtk_legacy_is_refused_clearly() {
         &b,
         &["POINTS", "3000000000 values declared"],
     );
+}
+
+const VTK_READ: &str = r#"
+import json, sys
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+path = sys.argv[1]
+r = vtk.vtkXMLPolyDataReader() if path.endswith(".vtp") else vtk.vtkPolyDataReader()
+messages = []
+r.AddObserver("ErrorEvent", lambda o, e: messages.append(e))
+r.AddObserver("WarningEvent", lambda o, e: messages.append(e))
+r.SetFileName(path)
+r.Update()
+pd = r.GetOutput()
+def arrays(data):
+    out = {}
+    for k in range(data.GetNumberOfArrays()):
+        a = data.GetArray(k)
+        out[a.GetName()] = {"type": a.GetDataTypeAsString(), "components": a.GetNumberOfComponents(),
+                            "values": [float(v) for v in vtk_to_numpy(a).ravel()]}
+    return out
+cells = []
+for c in range(pd.GetNumberOfCells()):
+    cell = pd.GetCell(c)
+    cells.append([pd.GetCellType(c)] + [cell.GetPointId(i) for i in range(cell.GetNumberOfPoints())])
+print(json.dumps({"messages": messages, "points": vtk_to_numpy(pd.GetPoints().GetData()).tolist(),
+                  "cells": cells, "point_data": arrays(pd.GetPointData()), "cell_data": arrays(pd.GetCellData())}))
+"#;
+
+/// VTK's own readers (ParaView's) read our .vtp and .vtk: points, lines then polygons in VTK's cell
+/// order, and every point- and cell-data array with its type, components and values.
+#[test]
+fn vtk_reads_our_lines_polygons_and_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let pd = sample();
+    for name in ["s.vtp", "s.vtk"] {
+        let path = dir.path().join(name);
+        if name.ends_with("vtp") {
+            write_vtp(&path, &pd).unwrap();
+        } else {
+            write_vtk_legacy(&path, &pd).unwrap();
+        }
+        let out = Command::new(python())
+            .arg("-c")
+            .arg(VTK_READ)
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["messages"], serde_json::json!([]), "{name}");
+        let points: Vec<[f64; 3]> = serde_json::from_value(v["points"].clone()).unwrap();
+        assert_eq!(points, pd.points, "{name}");
+        // VTK_LINE 3, VTK_POLY_LINE 4, VTK_TRIANGLE 5, VTK_QUAD 9.
+        let cells: Vec<Vec<u32>> = serde_json::from_value(v["cells"].clone()).unwrap();
+        assert_eq!(
+            cells,
+            vec![
+                vec![3, 0, 3],
+                vec![4, 1, 2, 3],
+                vec![5, 0, 1, 2],
+                vec![9, 0, 2, 3, 1]
+            ],
+            "{name}"
+        );
+        for (key, arrays) in [("point_data", &pd.point_data), ("cell_data", &pd.cell_data)] {
+            assert_eq!(
+                v[key].as_object().unwrap().len(),
+                arrays.len(),
+                "{name} {key}"
+            );
+            for a in arrays {
+                let got = &v[key][&a.name];
+                let ty = match a.values {
+                    DataValues::F32(_) => "float",
+                    DataValues::F64(_) => "double",
+                    DataValues::I32(_) => "int",
+                    DataValues::U8(_) => "unsigned char",
+                };
+                assert_eq!(got["type"], ty, "{name} {}", a.name);
+                assert_eq!(got["components"], a.components, "{name} {}", a.name);
+                let values: Vec<f64> = serde_json::from_value(got["values"].clone()).unwrap();
+                assert_eq!(values, a.values.to_f64(), "{name} {}", a.name);
+            }
+        }
+    }
 }

@@ -3,8 +3,9 @@
 //!
 //! **Written**: `# vtk DataFile Version 4.2`, `BINARY` (big-endian, as the format requires),
 //! `POINTS n double` (exact coordinates), `LINES` and `POLYGONS` in the classic layout (each cell
-//! as its size then its indices, 32-bit), then `POINT_DATA` and `CELL_DATA` with every array of
-//! 1 to 4 components as `SCALARS name type k` (`LOOKUP_TABLE default`) and wider ones in a `FIELD`.
+//! as its size then its indices, 32-bit), then `POINT_DATA` and `CELL_DATA`, each with its first
+//! array of 1 to 4 components as `SCALARS name type k` (`LOOKUP_TABLE default`, the active
+//! scalars) and the others in a `FIELD` (VTK's reader keeps only the first SCALARS by default).
 //! Types: float, double, int, unsigned_char. Names are written with VTK's `%XX` escapes for
 //! spaces, `%` and non-printable bytes. This layout is read by every VTK since 4, ParaView and
 //! 3D Slicer included.
@@ -146,7 +147,10 @@ pub(super) fn write_file(w: &mut dyn Write, data: &PolyData) -> std::io::Result<
             continue;
         }
         writeln!(w, "{keyword} {count}")?;
-        for a in arrays.iter().filter(|a| a.components <= 4) {
+        // The first array of 1 to 4 components as the active SCALARS; every other one in a FIELD,
+        // which VTK's reader always reads (it keeps only the first SCALARS by default).
+        let first = arrays.iter().position(|a| a.components <= 4);
+        if let Some(a) = first.map(|k| &arrays[k]) {
             writeln!(
                 w,
                 "SCALARS {} {} {}\nLOOKUP_TABLE default",
@@ -156,7 +160,10 @@ pub(super) fn write_file(w: &mut dyn Write, data: &PolyData) -> std::io::Result<
             )?;
             write_be(w, &a.values)?;
         }
-        let wide: Vec<&DataArray> = arrays.iter().filter(|a| a.components > 4).collect();
+        let wide: Vec<&DataArray> = (0..arrays.len())
+            .filter(|&k| Some(k) != first)
+            .map(|k| &arrays[k])
+            .collect();
         if !wide.is_empty() {
             writeln!(w, "FIELD FieldData {}", wide.len())?;
             for a in wide {
