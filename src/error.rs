@@ -14,7 +14,7 @@ pub enum Error {
         source: std::io::Error,
     },
     /// The file's extension names no format we read or write.
-    #[error("{}: unknown mesh format (expected extension .stl, .obj or .ply)", .path.display())]
+    #[error("{}: unknown mesh format (expected extension .stl, .obj, .ply, .vtp or .vtk)", .path.display())]
     UnknownFormat { path: PathBuf },
     /// The file's contents are malformed or describe no usable mesh.
     #[error("{}: {message}", .path.display())]

@@ -95,7 +95,7 @@ fn missing_file_is_an_io_error() {
 #[test]
 fn unknown_extension_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let path = write_file(dir.path(), "mesh.vtk", b"# vtk DataFile Version 3.0\n");
+    let path = write_file(dir.path(), "mesh.off", b"OFF\n3 1 0\n");
     let err = read_mesh(&path).unwrap_err();
     assert!(matches!(err, Error::UnknownFormat { .. }), "{err:?}");
     let text = err.to_string();
@@ -103,9 +103,9 @@ fn unknown_extension_is_refused() {
         text.contains(path.to_str().unwrap()) && text.contains("unknown mesh format"),
         "{text}"
     );
-    let err = write_mesh(&dir.path().join("out.vtk"), &TriMesh::default()).unwrap_err();
+    let err = write_mesh(&dir.path().join("out.off"), &TriMesh::default()).unwrap_err();
     assert!(matches!(err, Error::UnknownFormat { .. }), "{err:?}");
-    assert_eq!(listing(dir.path()), ["mesh.vtk"]);
+    assert_eq!(listing(dir.path()), ["mesh.off"]);
 }
 
 #[test]

@@ -1,7 +1,10 @@
-//! Reading and writing triangle meshes as STL, OBJ and PLY, the format chosen by file extension.
+//! Reading and writing triangle meshes as STL, OBJ, PLY, VTK XML PolyData (`.vtp`) and legacy VTK
+//! (`.vtk`), the format chosen by file extension.
 //!
 //! Readers accept binary and ASCII STL (corners welded by exact coordinates), OBJ (polygons
-//! fan-triangulated, all objects merged) and PLY (ascii and both binary byte orders). Every mesh
+//! fan-triangulated, all objects merged), PLY (ascii and both binary byte orders), `.vtp` and
+//! `.vtk` POLYDATA in the encodings VTK writes (`vtp`, `vtk_legacy`: polygons fan-triangulated,
+//! triangle strips cut, lines and vertices ignored). Every mesh
 //! read is validated: finite coordinates, at least one triangle, indices in range, and at least one
 //! non-degenerate triangle. Every error names the file and the problem in one line. Writers go
 //! through [`write_atomic`], so a failed write leaves no partial file.
@@ -20,6 +23,7 @@ mod stl;
 mod text;
 mod validate;
 mod vti;
+mod vtk_legacy;
 mod vtp;
 
 pub use atomic::write_atomic;
@@ -28,6 +32,7 @@ pub use npy::{npy_sidecar_path, read_npy, write_npy, NpySidecar};
 pub use npz::{read_npz, write_npz, NpyArray, NpyData};
 pub use nrrd::{read_nrrd, write_nrrd};
 pub use vti::{read_vti, write_vti, VTI_ARRAY_NAME};
+pub use vtk_legacy::{read_vtk_legacy, write_vtk_legacy, write_vtk_legacy_to};
 pub use vtp::{
     read_vtp, write_vtp, write_vtp_encoded_to, write_vtp_to, DataArray, DataValues, PolyData,
     VtpEncoding,
@@ -42,10 +47,15 @@ pub enum MeshFormat {
     Stl,
     Obj,
     Ply,
+    /// VTK XML PolyData.
+    Vtp,
+    /// Legacy VTK POLYDATA.
+    Vtk,
 }
 
 impl MeshFormat {
-    /// The format named by the extension of `path` (`.stl`, `.obj`, `.ply`, any case).
+    /// The format named by the extension of `path` (`.stl`, `.obj`, `.ply`, `.vtp`, `.vtk`, any
+    /// case).
     pub fn from_path(path: &Path) -> Result<MeshFormat> {
         let ext = path
             .extension()
@@ -55,6 +65,8 @@ impl MeshFormat {
             Some("stl") => Ok(MeshFormat::Stl),
             Some("obj") => Ok(MeshFormat::Obj),
             Some("ply") => Ok(MeshFormat::Ply),
+            Some("vtp") => Ok(MeshFormat::Vtp),
+            Some("vtk") => Ok(MeshFormat::Vtk),
             _ => Err(Error::UnknownFormat {
                 path: path.to_path_buf(),
             }),
@@ -79,13 +91,15 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh> {
         MeshFormat::Stl => stl::read(&bytes),
         MeshFormat::Obj => obj::read(&bytes),
         MeshFormat::Ply => ply::read(&bytes).map(|p| p.mesh),
+        MeshFormat::Vtp => vtp::parse_vtp(&bytes).and_then(|d| d.to_mesh()),
+        MeshFormat::Vtk => vtk_legacy::parse_vtk_legacy(&bytes).and_then(|d| d.to_mesh()),
     }
     .map_err(|m| Error::format(path, m))?;
     validate::validate_mesh(&mesh).map_err(|m| Error::format(path, m))?;
     Ok(mesh)
 }
 
-/// Named per-vertex scalar fields, as read from PLY.
+/// Named per-vertex scalar fields, as read from PLY, VTP or VTK.
 pub type ScalarFields = Vec<(String, Vec<f32>)>;
 
 /// Reads and validates a PLY mesh together with its per-vertex scalar properties other than
@@ -97,62 +111,148 @@ pub fn read_ply_scalars(path: &Path) -> Result<(TriMesh, ScalarFields)> {
             "per-vertex scalars can only be read from a .ply file",
         ));
     }
+    read_mesh_with_scalars(path)
+}
+
+/// Reads and validates a mesh with its per-vertex scalar fields (as f32, in file order): PLY
+/// vertex properties other than x, y, z, or the one-component point-data arrays of `.vtp` and
+/// `.vtk`. STL and OBJ have none.
+pub fn read_mesh_with_scalars(path: &Path) -> Result<(TriMesh, ScalarFields)> {
+    let format = MeshFormat::from_path(path)?;
     let bytes = read_bytes(path)?;
-    let read = ply::read(&bytes).map_err(|m| Error::format(path, m))?;
-    validate::validate_mesh(&read.mesh).map_err(|m| Error::format(path, m))?;
-    Ok((read.mesh, read.scalars))
+    let from_poly = |d: PolyData| -> std::result::Result<(TriMesh, ScalarFields), String> {
+        let fields = d
+            .point_data
+            .iter()
+            .filter(|a| a.components == 1)
+            .map(|a| {
+                (
+                    a.name.clone(),
+                    a.values.to_f64().iter().map(|&v| v as f32).collect(),
+                )
+            })
+            .collect();
+        Ok((d.to_mesh()?, fields))
+    };
+    let (mesh, fields) = match format {
+        MeshFormat::Stl => stl::read(&bytes).map(|m| (m, Vec::new())),
+        MeshFormat::Obj => obj::read(&bytes).map(|m| (m, Vec::new())),
+        MeshFormat::Ply => ply::read(&bytes).map(|p| (p.mesh, p.scalars)),
+        MeshFormat::Vtp => vtp::parse_vtp(&bytes).and_then(from_poly),
+        MeshFormat::Vtk => vtk_legacy::parse_vtk_legacy(&bytes).and_then(from_poly),
+    }
+    .map_err(|m| Error::format(path, m))?;
+    validate::validate_mesh(&mesh).map_err(|m| Error::format(path, m))?;
+    Ok((mesh, fields))
 }
 
 /// Writes a mesh in the format named by the extension: binary STL (f32, facet normals computed),
-/// OBJ (exact f64 text) or binary little-endian PLY (f64 coordinates). Atomic.
+/// OBJ (exact f64 text), binary little-endian PLY (f64 coordinates), VTK XML PolyData (Float64
+/// points, raw appended data) or binary legacy VTK (doubles). Atomic.
 pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
     let format = MeshFormat::from_path(path)?;
     validate::check_indices(mesh).map_err(Error::InvalidMesh)?;
+    if format == MeshFormat::Vtk && (mesh.num_faces() as u64 * 4 > i32::MAX as u64) {
+        return Err(Error::format(
+            path,
+            "too many triangles for the legacy VTK format (32-bit)",
+        ));
+    }
     write_atomic(path, |w| {
         match format {
             MeshFormat::Stl => stl::write(w, mesh),
             MeshFormat::Obj => obj::write(w, mesh),
             MeshFormat::Ply => ply::write(w, mesh, &[]),
+            MeshFormat::Vtp => {
+                vtp::write_file(w, &PolyData::from_mesh(mesh), VtpEncoding::Appended)
+            }
+            MeshFormat::Vtk => vtk_legacy::write_file(w, &PolyData::from_mesh(mesh)),
         }
         .map_err(|e| Error::io(path, e))
     })
 }
 
-/// Writes a mesh as binary PLY with one float vertex property per `(name, values)` pair; `path`
-/// must end in `.ply`, names must be identifiers other than x, y, z, and every `values` must have
-/// one entry per vertex. Atomic.
+/// Writes a mesh with one float per-vertex field per `(name, values)` pair: as PLY vertex
+/// properties (`.ply`; names must be identifiers other than x, y, z) or as point-data arrays
+/// (`.vtp`, `.vtk`). Every `values` must have one entry per vertex; names must be distinct. Atomic.
 pub fn write_mesh_with_scalars(
     path: &Path,
     mesh: &TriMesh,
     scalars: &[(&str, &[f32])],
 ) -> Result<()> {
-    if MeshFormat::from_path(path)? != MeshFormat::Ply {
+    write_mesh_with_fields(path, mesh, scalars, &[])
+}
+
+/// Writes a mesh with float per-vertex fields (`point_scalars`, one value per vertex) and per-face
+/// fields (`face_scalars`, one value per triangle, e.g. an "inpainted" flag as 0/1) as point-data
+/// and cell-data arrays of a `.vtp` or `.vtk` file. A `.ply` takes per-vertex fields only.
+/// Atomic.
+pub fn write_mesh_with_fields(
+    path: &Path,
+    mesh: &TriMesh,
+    point_scalars: &[(&str, &[f32])],
+    face_scalars: &[(&str, &[f32])],
+) -> Result<()> {
+    let format = MeshFormat::from_path(path)?;
+    let vtk = matches!(format, MeshFormat::Vtp | MeshFormat::Vtk);
+    if !vtk && !face_scalars.is_empty() {
         return Err(Error::format(
             path,
-            "per-vertex scalars can only be written to a .ply file",
+            "per-face scalars can only be written to a .vtp or .vtk file",
+        ));
+    }
+    if !vtk && format != MeshFormat::Ply {
+        return Err(Error::format(
+            path,
+            "per-vertex scalars can only be written to a .ply, .vtp or .vtk file",
         ));
     }
     validate::check_indices(mesh).map_err(Error::InvalidMesh)?;
-    for (k, (name, values)) in scalars.iter().enumerate() {
-        ply::check_field_name(name).map_err(|m| Error::format(path, m))?;
-        if scalars[..k].iter().any(|(other, _)| other == name) {
-            return Err(Error::format(
-                path,
-                format!("scalar name '{name}' is given twice"),
-            ));
-        }
-        if values.len() != mesh.num_vertices() {
-            return Err(Error::format(
-                path,
-                format!(
-                    "scalar '{name}' has {} values but the mesh has {} vertices",
-                    values.len(),
-                    mesh.num_vertices()
-                ),
-            ));
+    for (what, fields, count, unit) in [
+        ("scalar", point_scalars, mesh.num_vertices(), "vertices"),
+        ("face scalar", face_scalars, mesh.num_faces(), "triangles"),
+    ] {
+        for (k, (name, values)) in fields.iter().enumerate() {
+            if format == MeshFormat::Ply {
+                ply::check_field_name(name).map_err(|m| Error::format(path, m))?;
+            } else if name.is_empty() {
+                return Err(Error::format(path, format!("{what} {k} has an empty name")));
+            }
+            if fields[..k].iter().any(|(other, _)| other == name) {
+                return Err(Error::format(
+                    path,
+                    format!("{what} name '{name}' is given twice"),
+                ));
+            }
+            if values.len() != count {
+                return Err(Error::format(
+                    path,
+                    format!(
+                        "{what} '{name}' has {} values but the mesh has {count} {unit}",
+                        values.len(),
+                    ),
+                ));
+            }
         }
     }
-    write_atomic(path, |w| {
-        ply::write(w, mesh, scalars).map_err(|e| Error::io(path, e))
-    })
+    if format == MeshFormat::Ply {
+        return write_atomic(path, |w| {
+            ply::write(w, mesh, point_scalars).map_err(|e| Error::io(path, e))
+        });
+    }
+    let arrays = |fields: &[(&str, &[f32])]| -> Vec<DataArray> {
+        fields
+            .iter()
+            .map(|(name, values)| DataArray::scalars(name, DataValues::F32(values.to_vec())))
+            .collect()
+    };
+    let data = PolyData {
+        point_data: arrays(point_scalars),
+        cell_data: arrays(face_scalars),
+        ..PolyData::from_mesh(mesh)
+    };
+    match format {
+        MeshFormat::Vtp => write_vtp(path, &data),
+        _ => write_vtk_legacy(path, &data),
+    }
 }

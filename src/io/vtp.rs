@@ -457,7 +457,11 @@ fn xml_escape(s: &str) -> Cow<'_, str> {
     quick_xml::escape::escape(s)
 }
 
-fn write_file(w: &mut dyn Write, data: &PolyData, encoding: VtpEncoding) -> std::io::Result<()> {
+pub(super) fn write_file(
+    w: &mut dyn Write,
+    data: &PolyData,
+    encoding: VtpEncoding,
+) -> std::io::Result<()> {
     let points = Payload::Values(Out {
         name: "Points",
         components: 3,
@@ -619,7 +623,7 @@ pub(crate) fn parse_vtp(bytes: &[u8]) -> std::result::Result<PolyData, String> {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Ty {
+pub(super) enum Ty {
     I8,
     U8,
     I16,
@@ -648,7 +652,7 @@ impl Ty {
             _ => return None,
         })
     }
-    fn size(self) -> usize {
+    pub(super) fn size(self) -> usize {
         match self {
             Ty::I8 | Ty::U8 => 1,
             Ty::I16 | Ty::U16 => 2,
@@ -656,7 +660,7 @@ impl Ty {
             Ty::I64 | Ty::U64 | Ty::F64 => 8,
         }
     }
-    fn is_float(self) -> bool {
+    pub(super) fn is_float(self) -> bool {
         matches!(self, Ty::F32 | Ty::F64)
     }
 }
@@ -969,7 +973,7 @@ fn finish_array(
 }
 
 /// Decoded numbers of one array, in the widest form of their kind.
-enum Numbers {
+pub(super) enum Numbers {
     Int(Vec<i64>),
     Float(Vec<f64>),
 }
@@ -1147,7 +1151,7 @@ fn decode(
     from_bytes(&data, ty, file.big_endian)
 }
 
-fn from_bytes(data: &[u8], ty: Ty, big: bool) -> std::result::Result<Numbers, String> {
+pub(super) fn from_bytes(data: &[u8], ty: Ty, big: bool) -> std::result::Result<Numbers, String> {
     let size = ty.size();
     if !data.len().is_multiple_of(size) {
         return Err(format!(
@@ -1231,7 +1235,7 @@ fn parse_ascii(text: &[u8], ty: Ty) -> std::result::Result<Numbers, String> {
 }
 
 /// The values of a point- or cell-data array in our types (see the module doc).
-fn data_values(numbers: Numbers, ty: Ty) -> DataValues {
+pub(super) fn data_values(numbers: Numbers, ty: Ty) -> DataValues {
     match numbers {
         Numbers::Float(v) if ty == Ty::F32 => {
             DataValues::F32(v.into_iter().map(|x| x as f32).collect())
@@ -1354,63 +1358,79 @@ fn read_piece(
             ends,
         )?;
     }
-    let [_, lines, polys, strips] = &cells;
-
     let mut point_data = Vec::new();
     for desc in &piece.point_data {
         let Some(ty) = desc.ty else { continue };
-        let values = data_values(
-            decode(desc, file, bytes, ends)
-                .map_err(|m| format!("point data '{}': {m}", desc.name))?,
-            ty,
-        );
-        if values.len() as u64 != n.saturating_mul(desc.components as u64) {
-            return Err(format!(
-                "point data '{}' has {} values, not {n} points × {} components",
-                desc.name,
-                values.len(),
-                desc.components
-            ));
-        }
+        let numbers = decode(desc, file, bytes, ends)
+            .map_err(|m| format!("point data '{}': {m}", desc.name))?;
         point_data.push(DataArray {
             name: desc.name.clone(),
             components: desc.components,
-            values,
+            values: data_values(numbers, ty),
         });
     }
-
-    let [nv, nl, np_, ns] = [cells[0].len(), lines.len(), polys.len(), strips.len()];
-    let total_cells = nv + nl + np_ + ns;
     let mut cell_data = Vec::new();
     for desc in &piece.cell_data {
         let Some(ty) = desc.ty else { continue };
-        let values = data_values(
-            decode(desc, file, bytes, ends)
-                .map_err(|m| format!("cell data '{}': {m}", desc.name))?,
-            ty,
-        );
-        let c = desc.components;
-        if values.len() as u64 != (total_cells as u64).saturating_mul(c as u64) {
-            return Err(format!(
-                "cell data '{}' has {} values, not {total_cells} cells × {c} components",
-                desc.name,
-                values.len()
-            ));
-        }
-        // Lines and polys, then each strip's tuple once per triangle.
-        let mut kept = values.tuples(c, nv..nv + nl + np_);
-        for (s, strip) in strips.iter().enumerate() {
-            kept.push_repeated(&values, c, nv + nl + np_ + s, strip.len().saturating_sub(2));
-        }
+        let numbers = decode(desc, file, bytes, ends)
+            .map_err(|m| format!("cell data '{}': {m}", desc.name))?;
         cell_data.push(DataArray {
             name: desc.name.clone(),
-            components: c,
-            values: kept,
+            components: desc.components,
+            values: data_values(numbers, ty),
         });
     }
+    assemble(points, cells, point_data, cell_data)
+}
 
-    let mut polys = polys.clone();
-    for strip in strips {
+/// A [`PolyData`] from VTK's parts: cells of the four kinds (verts, lines, polys, strips), point
+/// data with one tuple per point and cell data with one tuple per cell of all four kinds in that
+/// order (both checked here). Verts and their tuples are dropped; strips are cut into triangles
+/// appended to the polygons, each repeating its strip's cell-data tuple.
+pub(super) fn assemble(
+    points: Vec<[f64; 3]>,
+    cells: [Vec<Vec<u32>>; 4],
+    point_data: Vec<DataArray>,
+    mut cell_data: Vec<DataArray>,
+) -> std::result::Result<PolyData, String> {
+    let n = points.len();
+    for a in &point_data {
+        if a.components == 0 || Some(a.values.len()) != n.checked_mul(a.components) {
+            return Err(format!(
+                "point data '{}' has {} values, not {n} points × {} components",
+                a.name,
+                a.values.len(),
+                a.components
+            ));
+        }
+    }
+    let [verts, lines, mut polys, strips] = cells;
+    let [nv, nl, np, ns] = [verts.len(), lines.len(), polys.len(), strips.len()];
+    let total = nv + nl + np + ns;
+    for a in &mut cell_data {
+        let c = a.components;
+        if c == 0 || Some(a.values.len()) != total.checked_mul(c) {
+            return Err(format!(
+                "cell data '{}' has {} values, not {total} cells × {c} components",
+                a.name,
+                a.values.len()
+            ));
+        }
+        if nv == 0 && ns == 0 {
+            continue;
+        }
+        let mut kept = a.values.tuples(c, nv..nv + nl + np);
+        for (s, strip) in strips.iter().enumerate() {
+            kept.push_repeated(
+                &a.values,
+                c,
+                nv + nl + np + s,
+                strip.len().saturating_sub(2),
+            );
+        }
+        a.values = kept;
+    }
+    for strip in &strips {
         for i in 0..strip.len().saturating_sub(2) {
             let (a, b, c) = (strip[i], strip[i + 1], strip[i + 2]);
             polys.push(if i % 2 == 0 {
@@ -1423,7 +1443,7 @@ fn read_piece(
     Ok(PolyData {
         points,
         polys,
-        lines: lines.clone(),
+        lines,
         point_data,
         cell_data,
     })
