@@ -31,7 +31,8 @@ Nothing here comes from the Rust code; only the voxel rule and the JSON shape ar
    two ends fixed) to take the voxel staircase out; then RECENTRE_PASSES passes move each inner
    point to the area centroid of its section loop (item 8) when the move is at most
    RECENTRE_MAX_FRACTION·DBF + h (a section across a junction takes in the other branches and is
-   left alone); tangent at a point = the chord between the points TANGENT_HALF_WINDOW_VOXELS·h of
+   left alone); a closed end that is no open end is finished by `_finish_blunt_end` (cut where
+   the rest lies within 1.5 DBF, continued straight along the tangent to the wall); tangent at a point = the chord between the points TANGENT_HALF_WINDOW_VOXELS·h of
    arc length before and after it (clamped to the branch); length = the polyline's length.
 7. radius at each point (and junction) = its exact distance to the mesh surface
    (`igl.point_mesh_squared_distance`): the maximal inscribed radius for a point on the axis.
@@ -81,6 +82,7 @@ CORE_FRACTION = 0.25
 RECENTRE_PASSES = 2
 RECENTRE_MAX_FRACTION = 0.25
 EXACT_WINDING_MAX_FACES = 2000
+BLUNT_END_REACH = 1.5
 
 
 # ---------------------------------------------------------------------------------------------
@@ -101,6 +103,14 @@ def default_voxel(V: np.ndarray, F: np.ndarray) -> float:
     return min(resolve, cap) if resolve > 0 else cap
 
 
+def _winding(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    import igl
+
+    if len(F) <= EXACT_WINDING_MAX_FACES:
+        return igl.winding_number(V, F, Q)  # exact: fast_winding_number crawls on slivers
+    return igl.fast_winding_number(V, F, Q)
+
+
 def inside_mask(V: np.ndarray, F: np.ndarray, h: float):
     """(mask uint8 of shape (nx, ny, nz), origin): |winding number| > 0.5 at the nodes."""
     import igl
@@ -112,10 +122,7 @@ def inside_mask(V: np.ndarray, F: np.ndarray, h: float):
     axes = [origin[a] + h * np.arange(dims[a]) for a in range(3)]
     X, Y, Z = np.meshgrid(*axes, indexing="ij")
     Q = np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1)
-    if len(F) <= EXACT_WINDING_MAX_FACES:
-        w = igl.winding_number(V, F, Q)  # exact: fast_winding_number crawls on sliver triangles
-    else:
-        w = igl.fast_winding_number(V, F, Q)
+    w = _winding(V, F, Q)
     mask = (np.abs(w) > 0.5).reshape(tuple(dims)).astype(np.uint8)
     return mask, origin
 
@@ -445,6 +452,42 @@ def equivalent_diameter(mesh, p: np.ndarray, t: np.ndarray) -> float | None:
     return None if found is None else 2.0 * math.sqrt(found[0] / math.pi)
 
 
+def _finish_blunt_end(V, F, Q: np.ndarray, r: np.ndarray, h: float):
+    """A closed (not open) end: TEASAR's last steps run from the axis to the farthest corner of
+    the blunt end. The branch is cut at its first point p_i (from the inner side) that has the
+    whole rest of the branch within BLUNT_END_REACH·r_i (r the DBF), and continued straight
+    (every h) along the chord from the point TANGENT_HALF_WINDOW_VOXELS·h + r_i of arc before
+    p_i to p_i, up to the wall: the |winding number| = 1/2 crossing along that ray (sampled every
+    h/8, linear between samples). Q ends at the end; returns (Q, r)."""
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(Q, axis=0), axis=1))])
+    left = s[-1] - s
+    i = None
+    for j in np.flatnonzero(left <= 3 * r.max()):
+        if j >= 1 and np.linalg.norm(Q[j + 1 :] - Q[j], axis=1).max(initial=0) <= BLUNT_END_REACH * r[j]:
+            i = int(j)
+            break
+    if i is None:
+        return Q, r
+    back = s[i] - (TANGENT_HALF_WINDOW_VOXELS * h + r[i])
+    if back < 0:
+        return Q, r
+    start = np.array([np.interp(back, s, Q[:, a]) for a in range(3)])
+    u = Q[i] - start
+    u /= np.linalg.norm(u)
+    reach = left[i] + 2 * r[i] + 2 * h
+    t = np.arange(0.0, reach + h / 8, h / 8)
+    w = np.abs(_winding(V, F, Q[i] + t[:, None] * u))
+    out = np.flatnonzero(w < 0.5)
+    if len(out) == 0 or out[0] == 0:
+        return Q, r
+    k = int(out[0])
+    a, b = w[k - 1] - 0.5, w[k] - 0.5
+    tw = t[k - 1] + (t[k] - t[k - 1]) * a / (a - b)
+    n = max(1, int(math.ceil(tw / h)))
+    ext = Q[i] + (np.arange(1, n + 1) / n * tw)[:, None] * u
+    return np.vstack([Q[: i + 1], ext]), np.concatenate([r[: i + 1], np.full(n, r[i])])
+
+
 def _recentre(mesh, Q: np.ndarray, r: np.ndarray, h: float) -> np.ndarray:
     """RECENTRE_PASSES passes: each inner point moves to the area centroid of its section loop
     (plane perpendicular to the branch's tangent there) when that loop holds the point and the
@@ -526,6 +569,13 @@ def centerline(V: np.ndarray, F: np.ndarray, voxel: float | None = None, mesh_na
     mesh = trimesh.Trimesh(V, F, process=False)
     for b in branches:
         b["points"] = _recentre(mesh, b["points"], b["radius_dbf"], h)
+        for first, kind, v in ((True, b["start"], b["_ends"][0]), (False, b["end"], b["_ends"][1])):
+            if kind == "end" and deg[v] == 1:
+                Q, r = b["points"], b["radius_dbf"]
+                if first:
+                    Q, r = Q[::-1], r[::-1]
+                Q, r = _finish_blunt_end(V, F, Q, r, h)
+                b["points"], b["radius_dbf"] = (Q[::-1], r[::-1]) if first else (Q, r)
         b["tangent"] = _tangents(b["points"], TANGENT_HALF_WINDOW_VOXELS * h)
         b["equivalent_diameter"] = [
             equivalent_diameter(mesh, p, tg) for p, tg in zip(b["points"], b["tangent"])

@@ -92,6 +92,10 @@ def test_capped_cylinder_axis_and_radius():
     eqd = np.asarray(doc["branches"][0]["equivalent_diameter"], float)[away]
     expect = 2 * R * math.sqrt(128 * math.sin(2 * math.pi / 128) / (2 * math.pi))
     assert np.abs(eqd - expect).max() <= 0.01 * R
+    # the blunt ends are finished on the axis, at the caps
+    ends = sorted(np.asarray(e["position"]) @ axis for e in doc["endpoints"])
+    assert abs(ends[0] + L / 2) <= 0.5 * H and abs(ends[1] - L / 2) <= 0.5 * H
+    assert abs(doc["branches"][0]["length"] - L) <= H
 
 
 def test_half_torus_axis_and_radius():
