@@ -10,6 +10,7 @@
 //! (the command-line tool; `main.rs` only calls it).
 
 pub mod bvh;
+pub mod centerline;
 pub mod cli;
 pub mod error;
 pub mod grid;

@@ -3,6 +3,7 @@
 //! exit status 2; outputs are only written when the whole command succeeded.
 
 mod cap;
+mod centerline;
 mod compare;
 mod decompose;
 mod evolve;
@@ -46,6 +47,9 @@ pub enum Command {
     /// Close every boundary loop (open vessel ends, holes) with refined planar caps and write a
     /// watertight, outward-oriented mesh.
     Cap(cap::CapArgs),
+    /// Centreline graph of a vessel mesh: branches with their maximal inscribed radius and
+    /// tangent, junctions and endpoints, written as .json or .vtp.
+    Centerline(centerline::CenterlineArgs),
     /// Distances between two surfaces (Hausdorff, mean, RMS) and their volumes.
     Compare(compare::CompareArgs),
     /// Signed distance grid φ of a mesh (negative inside), written as .npy (+ .npy.json sidecar)
@@ -108,6 +112,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Info { mesh } => info::run(&ctx, &mesh),
         Command::Cap(args) => cap::run(&ctx, &args),
+        Command::Centerline(args) => centerline::run(&ctx, &args),
         Command::Compare(args) => compare::run(&ctx, &args),
         Command::Voxelize(args) => voxelize::run(&ctx, &args),
         Command::Remesh(args) => remesh::run(&ctx, &args),

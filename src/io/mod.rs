@@ -19,12 +19,17 @@ mod stl;
 mod text;
 mod validate;
 mod vti;
+mod vtp;
 
 pub use atomic::write_atomic;
 pub use npy::{npy_sidecar_path, read_npy, write_npy, NpySidecar};
 pub use npz::{read_npz, write_npz, NpyArray, NpyData};
 pub use nrrd::{read_nrrd, write_nrrd};
 pub use vti::{read_vti, write_vti, VTI_ARRAY_NAME};
+pub use vtp::{
+    read_vtp, write_vtp, write_vtp_encoded_to, write_vtp_to, DataArray, DataValues, PolyData,
+    VtpEncoding,
+};
 
 use crate::{Error, Result, TriMesh};
 use std::path::Path;

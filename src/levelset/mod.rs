@@ -5,6 +5,7 @@
 //! (extracted vertices onto the input surface), `speck` (lone nodes a hair's breadth across zero).
 
 pub mod cavity;
+pub mod chamfer;
 pub mod marching_cubes;
 pub mod project;
 pub mod redistance;

@@ -1,0 +1,135 @@
+//! A fast approximate distance inside a narrow-band φ: the 3×3×3 chamfer distance transform
+//! (Borgefors 1984, weights 1, √2, √3 voxels) run forward and backward over the grid, seeded by
+//! the exact distances of the band.
+//!
+//! `voxelize` leaves φ exact within its band and clamped to −band·h beyond; the centreline
+//! (`centerline::skeleton`) needs a distance to the wall deep inside too, but only to order the
+//! grid's nodes along the ridge of that distance, not to measure it (its radii are exact distances
+//! to the mesh). Two sweeps of the chamfer mask cost far less than a full redistance; the
+//! distance they give overestimates the Euclidean one by at most about 8% (the chamfer's
+//! anisotropy), never underestimates it.
+
+use crate::grid::Grid3;
+
+/// Replaces every inside value at or below `-clamp` (world units; the band's clamp) by the
+/// chamfer distance from the nodes above it, negated; values above `-clamp` and every outside
+/// value are kept.
+pub fn chamfer_inside(phi: &mut Grid3, clamp: f64) {
+    let [nx, ny, nz] = phi.dims();
+    let h = phi.voxel() as f32;
+    let clamp = clamp as f32;
+    let data = phi.data_mut();
+    // Work on the depth d = −φ of the clamped inside nodes; +∞ marks the ones to compute.
+    let free: Vec<bool> = data.iter().map(|&v| v <= -clamp).collect();
+    let mut d: Vec<f32> = data
+        .iter()
+        .zip(&free)
+        .map(|(&v, &f)| if f { f32::INFINITY } else { -v })
+        .collect();
+    let (sy, sz) = (nx, nx * ny);
+    // The 13 neighbours that come before a node in x-fastest order, with their lengths.
+    let mut back: Vec<([isize; 3], f32)> = Vec::with_capacity(13);
+    for dz in -1isize..=1 {
+        for dy in -1isize..=1 {
+            for dx in -1isize..=1 {
+                let before = dz < 0 || (dz == 0 && (dy < 0 || (dy == 0 && dx < 0)));
+                if before {
+                    let len = ((dx * dx + dy * dy + dz * dz) as f32).sqrt() * h;
+                    back.push(([dx, dy, dz], len));
+                }
+            }
+        }
+    }
+    let relax = |d: &mut [f32], i: usize, j: usize, k: usize, sign: isize| {
+        let n = i + j * sy + k * sz;
+        if !free[n] {
+            return;
+        }
+        let mut best = d[n];
+        for &([dx, dy, dz], len) in &back {
+            let (a, b, c) = (
+                i as isize + sign * dx,
+                j as isize + sign * dy,
+                k as isize + sign * dz,
+            );
+            if a < 0 || b < 0 || c < 0 || a >= nx as isize || b >= ny as isize || c >= nz as isize {
+                continue;
+            }
+            let m = a as usize + b as usize * sy + c as usize * sz;
+            // Only inside nodes carry a depth (an outside node's −φ is negative).
+            let dm = d[m];
+            if dm >= 0.0 && dm + len < best {
+                best = dm + len;
+            }
+        }
+        d[n] = best;
+    };
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                relax(&mut d, i, j, k, 1);
+            }
+        }
+    }
+    for k in (0..nz).rev() {
+        for j in (0..ny).rev() {
+            for i in (0..nx).rev() {
+                relax(&mut d, i, j, k, -1);
+            }
+        }
+    }
+    for ((v, &f), &dv) in data.iter_mut().zip(&free).zip(&d) {
+        if f && dv.is_finite() {
+            *v = -dv;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::GridTransform;
+    use nalgebra::Point3;
+
+    /// Inside a ball of radius 20 voxels with exact distances within 3 voxels of the sphere
+    /// and −3 beyond, the chamfer depth is within [1, 1.09] times the true one.
+    #[test]
+    fn chamfer_depth_in_a_ball() {
+        let n = 48;
+        let c = 23.5;
+        let r = 20.0;
+        let mut data = Vec::new();
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let s =
+                        ((i as f64 - c).powi(2) + (j as f64 - c).powi(2) + (k as f64 - c).powi(2))
+                            .sqrt()
+                            - r;
+                    data.push(s.max(-3.0) as f32);
+                }
+            }
+        }
+        let mut phi =
+            Grid3::from_data([n, n, n], GridTransform::new(Point3::origin(), 1.0), data).unwrap();
+        chamfer_inside(&mut phi, 3.0);
+        let mut worst: f64 = 1.0;
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let s = r
+                        - ((i as f64 - c).powi(2)
+                            + (j as f64 - c).powi(2)
+                            + (k as f64 - c).powi(2))
+                        .sqrt();
+                    if s > 3.0 {
+                        let ratio = -phi.get(i, j, k) as f64 / s;
+                        assert!(ratio >= 0.999, "({i},{j},{k}) ratio {ratio}");
+                        worst = worst.max(ratio);
+                    }
+                }
+            }
+        }
+        assert!(worst <= 1.09, "worst ratio {worst}");
+    }
+}
