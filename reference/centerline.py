@@ -21,7 +21,8 @@ Nothing here comes from the Rust code; only the voxel rule and the JSON shape ar
    equivalent radius ρ = perimeter / 2π. TEASAR traces a bush of paths to the rim of each flat,
    winding-number-closed opening: the skeleton vertices within ρ + OPEN_END_SLACK_VOXELS·h of c
    are removed, components shorter than twice their largest DBF dropped, and c is joined
-   straight to the nearest vertex left whose DBF is at least CORE_FRACTION·ρ: an open end.
+   straight (a vertex every h) to the nearest vertex left whose DBF is at least CORE_FRACTION·ρ:
+   an open end.
 5. graph from the skeleton's edges: endpoints (degree 1), junctions (degree >= 3; adjacent
    junction vertices form one junction at their mean position), branches = vertex chains between
    them; closed chains without endpoint or junction are one branch. Spurs are pruned: branches
@@ -29,9 +30,9 @@ Nothing here comes from the Rust code; only the voxel rule and the JSON shape ar
    DBF are removed, all at once, and the graph rebuilt, until none is left.
 6. each branch: smoothed (SMOOTH_ITERATIONS passes of p_i <- (p_{i-1} + 2 p_i + p_{i+1}) / 4, its
    two ends fixed) to take the voxel staircase out; then RECENTRE_PASSES passes move each inner
-   point to the area centroid of its section loop (item 8) when the move is at most
-   RECENTRE_MAX_FRACTION·DBF + h (a section across a junction takes in the other branches and is
-   left alone); a closed end that is no open end is finished by `_finish_blunt_end` (cut where
+   point to the area centroid of its section loop (item 8) when that loop is one lumen (its
+   equivalent radius RECENTRE_LUMEN times the DBF: a section across a junction takes in the other
+   branches) and the move is at most RECENTRE_MAX_FRACTION·DBF + h; a closed end that is no open end is finished by `_finish_blunt_end` (cut where
    the rest lies within 1.5 DBF, continued straight along the tangent to the wall); tangent at a point = the chord between the points TANGENT_HALF_WINDOW_VOXELS·h of
    arc length before and after it (clamped to the branch); length = the polyline's length.
 7. radius at each point (and junction) = its exact distance to the mesh surface
@@ -80,7 +81,8 @@ OPEN_END_SLACK_VOXELS = 2.0
 SPUR_FACTOR = 1.0
 CORE_FRACTION = 0.25
 RECENTRE_PASSES = 2
-RECENTRE_MAX_FRACTION = 0.25
+RECENTRE_MAX_FRACTION = 0.1
+RECENTRE_LUMEN = (0.75, 1.3)
 EXACT_WINDING_MAX_FACES = 2000
 BLUNT_END_REACH = 1.5
 
@@ -337,8 +339,8 @@ def _clean(P, R, edges, loops, h):
     equivalent radius ρ) the vertices within ρ + OPEN_END_SLACK_VOXELS·h of c are removed (the
     bush of paths TEASAR traces to the rim of the flat, winding-number-closed opening), components
     shorter than twice their largest radius dropped, and c is joined straight to the nearest
-    vertex left whose radius is at least CORE_FRACTION·ρ (else the nearest), as a new vertex
-    with that vertex's radius (an open end); then spurs are pruned (`_prune_spurs`, open ends
+    vertex left whose radius is at least CORE_FRACTION·ρ (else the nearest) by new vertices
+    every h with that vertex's radius, the last at c (an open end); then spurs are pruned (`_prune_spurs`, open ends
     kept) and small components without an open end dropped again. Returns
     (P, R, edges, open-end vertices)."""
     keep = np.ones(len(P), bool)
@@ -356,11 +358,16 @@ def _clean(P, R, edges, loops, h):
         cand = core if len(core) else kept
         d = np.linalg.norm(np.asarray(P)[cand] - lp["centroid"], axis=1)
         u = int(cand[int(np.argmin(d))])
-        v = len(P)
-        P.append(np.asarray(lp["centroid"], np.float64))
-        R.append(R[u])
-        edges.append((u, v))
-        open_ends.add(v)
+        # the chord from u to c, a vertex every h (so smoothing and recentring can bend it)
+        n = max(1, int(math.ceil(float(d.min()) / h)))
+        prev = u
+        for k in range(1, n + 1):
+            v = len(P)
+            P.append(P[u] + (k / n) * (np.asarray(lp["centroid"], np.float64) - P[u]))
+            R.append(R[u])
+            edges.append((prev, v))
+            prev = v
+        open_ends.add(prev)
     P, R = np.asarray(P).reshape(-1, 3), np.asarray(R)
     edges = np.asarray(edges, np.int64).reshape(-1, 2)
     edges = _prune_spurs(P, R, edges, open_ends)
@@ -490,15 +497,19 @@ def _finish_blunt_end(V, F, Q: np.ndarray, r: np.ndarray, h: float):
 
 def _recentre(mesh, Q: np.ndarray, r: np.ndarray, h: float) -> np.ndarray:
     """RECENTRE_PASSES passes: each inner point moves to the area centroid of its section loop
-    (plane perpendicular to the branch's tangent there) when that loop holds the point and the
-    move is at most RECENTRE_MAX_FRACTION·r + h (so sections across a junction, whose loop
-    takes in the other branches, leave the point where it is)."""
+    (plane perpendicular to the branch's tangent there) when that loop is one lumen around the
+    point (its equivalent radius within RECENTRE_LUMEN times the DBF r: a section across a
+    junction takes in the other branches) and the move is at most RECENTRE_MAX_FRACTION·r + h."""
     Q = Q.copy()
     for _ in range(RECENTRE_PASSES):
         T = _tangents(Q, TANGENT_HALF_WINDOW_VOXELS * h)
         for i in range(1, len(Q) - 1):
             found = section_loop(mesh, Q[i], T[i])
-            if found is not None and np.linalg.norm(found[1] - Q[i]) <= RECENTRE_MAX_FRACTION * r[i] + h:
+            if found is None:
+                continue
+            eq_radius = math.sqrt(found[0] / math.pi)
+            one_lumen = RECENTRE_LUMEN[0] * r[i] <= eq_radius <= RECENTRE_LUMEN[1] * r[i]
+            if one_lumen and np.linalg.norm(found[1] - Q[i]) <= RECENTRE_MAX_FRACTION * r[i] + h:
                 Q[i] = found[1]
     return Q
 
