@@ -28,8 +28,9 @@
 //! An earlier run (load 5.2–6.0, the reference before its recentring was tightened): ours 3.36,
 //! 2.33, 0.77, 1.68, 0.58 s; reference 21.98, 13.16, 9.15, 12.62, 5.37 s; ratios 6.5, 5.7, 11.9,
 //! 7.5, 9.2. So under this load: < 2 s on three of five (the aortas take 2.1–3.4 s) and 5–12×
-//! the reference, short of the >= 10× asked on most. The reference's time is mostly the winding
-//! number on the grid and kimimaro (about 40 % and 30 %), then the sections.
+//! the reference, short of the >= 10× asked on most. The reference's time: the winding number
+//! on the grid 25–49 %, the trimesh sections (three per point: two recentring passes and the
+//! diameter) 23–67 %, kimimaro 7–28 %.
 //! Agreement: the same topology everywhere; centerlines within 0.07–0.42 h on average and radii
 //! within 0.01–0.14 h, except the capped aorta, where our branches do not reach their junction
 //! (their junction ends lie 24, 48 and 26 h from the junction's position; the reference's and
