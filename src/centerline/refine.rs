@@ -71,8 +71,8 @@ pub fn refine_branch(
     pts = smooth(&pts, opts.smooth_voxels * h / spacing);
 
     // Blunt ends: trim the corner run and continue along the axis to the wall.
-    for side in 0..2 {
-        if ends[side] != EndKind::End || pts.len() < 3 {
+    for (side, kind) in ends.iter().enumerate() {
+        if *kind != EndKind::End || pts.len() < 3 {
             continue;
         }
         // trim_and_extend works on the last point: bring the first one there.

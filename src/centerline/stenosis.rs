@@ -146,15 +146,12 @@ pub fn find_stenoses(
 
         // Lesions: runs above half their own peak, from the deepest down.
         let mut used = vec![false; narrowing.len()];
-        loop {
-            let Some((k, &peak)) = narrowing
-                .iter()
-                .enumerate()
-                .filter(|(k, _)| !used[*k])
-                .max_by(|a, b| a.1.total_cmp(b.1))
-            else {
-                break;
-            };
+        while let Some((k, &peak)) = narrowing
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| !used[*k])
+            .max_by(|a, b| a.1.total_cmp(b.1))
+        {
             if peak * 100.0 < opts.min_degree_pct {
                 break;
             }
