@@ -12,7 +12,9 @@ use crate::inpaint::holes::{classify_loops, LoopKind, LoopOptions};
 use crate::levelset::chamfer::chamfer_inside;
 use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
 use crate::mesh::cap::{cap_holes, CapOptions};
-use crate::mesh::measures::{bounding_box, mean_edge_length, signed_volume};
+use crate::mesh::measures::{
+    area, area_centroid, bounding_box, mean_edge_length, signed_volume_about,
+};
 use crate::{Error, Result, TriMesh};
 use nalgebra::Point3;
 use rayon::prelude::*;
@@ -22,8 +24,9 @@ use std::time::Instant;
 /// Options of [`compute_centerline`].
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct CenterlineOptions {
-    /// The grid (voxel in world units; default: the project's rule on the mesh, coarsened so
-    /// that the inside holds at most about 1.5 million nodes).
+    /// The grid (voxel in world units; default: the project's rule on the mesh, coarsened to a
+    /// tenth of the typical vessel radius and so that the inside holds at most about 1.5 million
+    /// nodes).
     pub grid: GridOptions,
     pub skeleton: SkeletonOptions,
     pub refine: RefineOptions,
@@ -45,9 +48,16 @@ const MIN_COMPONENT_NODES: usize = 8;
 /// million; a blob such as a 10 mm sphere at 256 cells across has 9 million).
 const MAX_INSIDE_NODES: f64 = 1.5e6;
 
-/// The grid options of the centreline: the project's default voxel, coarsened so that the
-/// mesh's enclosed volume holds at most [`MAX_INSIDE_NODES`] nodes; a voxel or resolution the
-/// caller gave is kept.
+/// Voxels across the typical vessel radius the centreline's grid needs at least (the skeleton
+/// only has to find the lumen's ridge and topology; the curve is then centred on the mesh's own
+/// sections and its radii are exact distances to the mesh).
+const VOXELS_PER_RADIUS: f64 = 10.0;
+
+/// The grid options of the centreline: the project's default voxel, coarsened to a tenth of the
+/// typical vessel radius (2 × volume / area, exact for a long tube) and so that the enclosed
+/// volume holds at most [`MAX_INSIDE_NODES`] nodes; a voxel or resolution the caller gave is
+/// kept. Volumes are taken about the area centroid, so that open ends far from the origin do
+/// not weigh.
 fn centerline_grid(mesh: &TriMesh, grid: &GridOptions) -> GridOptions {
     if grid.voxel.is_some() || grid.resolution.is_some() {
         return *grid;
@@ -55,7 +65,11 @@ fn centerline_grid(mesh: &TriMesh, grid: &GridOptions) -> GridOptions {
     let (lo, hi) = bounding_box(mesh);
     let longest = (hi - lo).max();
     let voxel = default_voxel(mean_edge_length(mesh), longest);
-    let coarse = (signed_volume(mesh).abs() / MAX_INSIDE_NODES).cbrt();
+    let volume = signed_volume_about(mesh, &area_centroid(mesh)).abs();
+    let typical_radius = 2.0 * volume / area(mesh);
+    let coarse = (volume / MAX_INSIDE_NODES)
+        .cbrt()
+        .max(typical_radius / VOXELS_PER_RADIUS);
     GridOptions {
         voxel: Some(voxel.max(coarse)).filter(|v| v.is_finite() && *v > 0.0 && *v <= longest),
         ..*grid
