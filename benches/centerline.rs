@@ -3,7 +3,8 @@
 //! skeleton, the JSON), against the independent Python route `reference/centerline.py MESH -o
 //! REF.json` (libigl winding-number mask, kimimaro TEASAR skeleton, trimesh sections; its own
 //! Python start-up and imports included), on each real vessel of ../shared/data/real (all but the
-//! cortex; skipped with a notice when ../shared is absent), both at their default voxel.
+//! cortex; skipped with a notice when ../shared is absent), both on the same grid: ours at its
+//! default voxel, the reference given that voxel (`--voxel`, read from our JSON).
 //!
 //! Per mesh, 3 rounds of one run of each, interleaved (ours, then the reference), so that both
 //! sides of a round run under the same load; the figure of each side is its best wall time of
@@ -84,13 +85,23 @@ fn ours(mesh: &Path, out: &Path) -> Command {
     cmd
 }
 
-fn reference_cmd(python: &Path, mesh: &Path, out: &Path) -> Command {
+fn reference_cmd(python: &Path, mesh: &Path, out: &Path, voxel: Option<f64>) -> Command {
     let mut cmd = Command::new(python);
     cmd.arg(common::root().join("reference/centerline.py"))
         .arg(mesh)
         .arg("-o")
         .arg(out);
+    if let Some(h) = voxel {
+        cmd.arg("--voxel").arg(format!("{h:e}"));
+    }
     cmd
+}
+
+/// The voxel our centreline was traced on (from its JSON), so the reference works on the same
+/// grid.
+fn our_voxel(json: &Path) -> Option<f64> {
+    let v: Value = serde_json::from_slice(&std::fs::read(json).ok()?).ok()?;
+    v["voxel"].as_f64()
 }
 
 /// The reference's Python, as `common::Reference::find` chooses it.
@@ -180,7 +191,8 @@ fn main() {
         for _ in 0..ROUNDS {
             ours_times.push(timed(&mut ours(&mesh, &ours_json)));
             if let Some(py) = &python {
-                ref_times.push(timed(&mut reference_cmd(py, &mesh, &ref_json)));
+                let voxel = our_voxel(&ours_json);
+                ref_times.push(timed(&mut reference_cmd(py, &mesh, &ref_json, voxel)));
             }
         }
         let o = best(&ours_times);

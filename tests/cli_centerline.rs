@@ -19,6 +19,23 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// The stenosis phantom (damaged, truth) written into `d` by the CLI.
+fn stenosis_phantom(d: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let (damaged, truth, regions) = (d.join("s.stl"), d.join("t.stl"), d.join("r.json"));
+    let out = vesselmsr(&[
+        "phantom",
+        "stenosis",
+        "-o",
+        s(&damaged),
+        "--truth",
+        s(&truth),
+        "--regions-out",
+        s(&regions),
+    ]);
+    assert!(out.status.success());
+    (damaged, truth)
+}
+
 #[test]
 fn centerline_json_and_vtp_of_the_aorta() {
     let dir = tempfile::tempdir().unwrap();
@@ -74,18 +91,7 @@ print(d.GetNumberOfLines(), d.GetNumberOfPoints(), pd.GetArray('Radius').GetNumb
 fn profile_and_stenosis_of_the_stenosis_phantom() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (damaged, truth, regions) = (d.join("s.stl"), d.join("t.stl"), d.join("r.json"));
-    let out = vesselmsr(&[
-        "phantom",
-        "stenosis",
-        "-o",
-        s(&damaged),
-        "--truth",
-        s(&truth),
-        "--regions-out",
-        s(&regions),
-    ]);
-    assert!(out.status.success());
+    let (damaged, truth) = stenosis_phantom(d);
     let csv = d.join("p.csv");
     let png = d.join("p.png");
     let out = vesselmsr(&[
@@ -191,19 +197,7 @@ fn bad_inputs() {
 fn repair_measures_along_the_centerline() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (damaged, truth, regions) = (d.join("s.stl"), d.join("t.stl"), d.join("r.json"));
-    assert!(vesselmsr(&[
-        "phantom",
-        "stenosis",
-        "-o",
-        s(&damaged),
-        "--truth",
-        s(&truth),
-        "--regions-out",
-        s(&regions),
-    ])
-    .status
-    .success());
+    let (damaged, truth) = stenosis_phantom(d);
     let healthy_radius = 3.0;
     let report = d.join("rep.json");
     let out = d.join("out.stl");

@@ -115,16 +115,14 @@ pub fn compute_centerline(
         .collect();
 
     let spec = grid_for_mesh(mesh, &centerline_grid(mesh, &opts.grid))?;
-    let mut phi = voxelize(mesh, spec.dims, spec.transform, &VoxelizeOptions::default()).map_err(
-        |e| match e {
-            Error::Geometry(m) if m.contains("encloses no volume") => Error::Geometry(
-                "the mesh has no inside (it encloses no volume): no centreline".into(),
-            ),
-            e => e,
-        },
-    )?;
-    // Exact within the band; the chamfer distance deeper inside orders the ridge.
     let vox = VoxelizeOptions::default();
+    let mut phi = voxelize(mesh, spec.dims, spec.transform, &vox).map_err(|e| match e {
+        Error::Geometry(m) if m.contains("encloses no volume") => {
+            Error::Geometry("the mesh has no inside (it encloses no volume): no centreline".into())
+        }
+        e => e,
+    })?;
+    // Exact within the band; the chamfer distance deeper inside orders the ridge.
     let clamp = 0.999 * vox.band * phi.voxel();
     chamfer_inside(&mut phi, clamp);
     let distance_s = t.elapsed().as_secs_f64();

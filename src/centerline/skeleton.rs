@@ -66,12 +66,8 @@ pub struct ComponentSkeleton {
     pub path_ends: Vec<Option<usize>>,
     /// The open end the root is (index into `ends`), if any.
     pub root_end: Option<usize>,
-    /// Number of inside nodes of the component.
-    pub nodes: usize,
     /// Largest distance to the boundary in the component, world units.
     pub max_depth: f64,
-    /// Paths left out as spurs.
-    pub spurs: usize,
 }
 
 /// Total order on f32 costs for the heaps (NaN never enters).
@@ -358,7 +354,6 @@ fn trace_component(
     let mut search = RidgeSearch::new(inside.len());
     let mut paths = Vec::new();
     let mut path_ends = Vec::new();
-    let mut spurs = 0;
     let scale = opts.invalidation_scale as f32;
     let constant = opts.invalidation_const_voxels as f32;
     cover(inside, &[root], scale, constant, &mut budget);
@@ -394,7 +389,6 @@ fn trace_component(
         };
         let join = *path.last().expect("path has its join");
         if end.is_none() && is_spur(inside, &path, join, &skeleton_nodes, opts.spur_factor) {
-            spurs += 1;
             cover(inside, &path, scale, constant, &mut budget);
             continue;
         }
@@ -411,9 +405,7 @@ fn trace_component(
         paths,
         path_ends,
         root_end,
-        nodes: nodes.len(),
         max_depth,
-        spurs,
     }
 }
 
