@@ -69,8 +69,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import oracle  # noqa: E402
 from oracle import OracleError  # noqa: E402
+from inpaint import default_voxel  # noqa: E402  (the project's voxel rule, as inpaint.py has it)
 
-DEFAULT_MIN_CELLS = 256
 PAD_VOXELS = 3
 SCALE = 1.5
 CONST_VOXELS = 2.0
@@ -89,20 +89,6 @@ BLUNT_END_REACH = 1.5
 
 # ---------------------------------------------------------------------------------------------
 # voxel rule and mask
-
-
-def mean_unique_edge(V: np.ndarray, F: np.ndarray) -> float:
-    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    E = np.unique(E, axis=0)
-    return float(np.linalg.norm(V[E[:, 1]] - V[E[:, 0]], axis=1).mean()) if len(E) else 0.0
-
-
-def default_voxel(V: np.ndarray, F: np.ndarray) -> float:
-    used = V[np.unique(F)]
-    longest = float((used.max(0) - used.min(0)).max())
-    cap = longest / DEFAULT_MIN_CELLS
-    resolve = mean_unique_edge(V, F) / 2.0
-    return min(resolve, cap) if resolve > 0 else cap
 
 
 def _winding(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
