@@ -7,6 +7,8 @@ use super::{print_json, progress, Context};
 use crate::centerline::extract::CenterlineTimings;
 use crate::centerline::{compute_centerline, Centerline, CenterlineOptions};
 use crate::io::{read_centerline_json, read_mesh, write_centerline_json, write_centerline_vtp};
+use crate::report::centerline_plot::centerline_picture;
+use crate::report::image::write_png;
 use crate::TriMesh;
 use anyhow::Context as _;
 use std::path::{Path, PathBuf};
@@ -19,6 +21,9 @@ pub struct CenterlineArgs {
     /// Output: .json (every point, radius, tangent, branch, junction, endpoint) or .vtp.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Also draw the centreline over the mesh (PNG): three views along the axes.
+    #[arg(long, value_name = "CL.png")]
+    pub picture: Option<PathBuf>,
     #[command(flatten)]
     pub grid: GridArgs,
 }
@@ -137,7 +142,11 @@ pub fn run(ctx: &Context, args: &CenterlineArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let format = args.output.as_deref().map(output_format).transpose()?;
     let bar = progress::spinner(ctx.quiet, "tracing the centreline");
-    let (_, cl, steps, read_s) = load_centerline(&args.mesh, &args.grid)?;
+    let (mesh, cl, steps, read_s) = load_centerline(&args.mesh, &args.grid)?;
+    let picture = match &args.picture {
+        Some(_) => Some(centerline_picture(&mesh, &cl, (480, 480))?),
+        None => None,
+    };
     bar.finish_and_clear();
     print_notices(ctx, &args.mesh, &cl);
     let t = Instant::now();
@@ -146,6 +155,9 @@ pub fn run(ctx: &Context, args: &CenterlineArgs) -> anyhow::Result<()> {
             Format::Json => write_centerline_json(path, &cl)?,
             Format::Vtp => write_centerline_vtp(path, &cl)?,
         }
+    }
+    if let (Some(path), Some(image)) = (&args.picture, &picture) {
+        write_png(path, image)?;
     }
     let write_s = t.elapsed().as_secs_f64();
     let summary = Summary {
@@ -198,7 +210,7 @@ pub fn run(ctx: &Context, args: &CenterlineArgs) -> anyhow::Result<()> {
             b.id, b.length, b.mean_radius, b.min_radius, b.start, b.end
         );
     }
-    if let Some(p) = &args.output {
+    for p in args.output.iter().chain(&args.picture) {
         println!("wrote {}", p.display());
     }
     Ok(())

@@ -4,6 +4,7 @@
 //! draws the per-level detail histograms as small multiples (their Figure 2), `colormap` holds
 //! the colour maps, and `image` the RGB raster and its atomic PNG writer.
 
+pub mod centerline_plot;
 pub mod colormap;
 pub mod histogram;
 pub mod image;
