@@ -1,6 +1,7 @@
 //! Closest-point queries: the point–triangle routine against sampling and analytic cases, the
-//! hierarchy against brute force on the real meshes and on a small mesh far from the origin, and
-//! an icosphere at known radii.
+//! hierarchy against brute force on the real meshes (2,000 points each; 10,000 in the slow tests,
+//! `bash tests/run_slow.sh`) and on a small mesh far from the origin, and an icosphere at known
+//! radii.
 
 mod common;
 use common::*;
@@ -171,14 +172,15 @@ fn compare_with_brute(mesh: &TriMesh, bvh: &MeshBvh, pts: &[Point3<f64>]) -> f64
         .reduce(|| 0.0, f64::max)
 }
 
-#[test]
-fn real_meshes_bvh_equals_brute_force() {
+/// Every real mesh: the BVH's closest points of `n` seeded points (near the surface and in the
+/// box) equal a scan of every triangle, and the narrow-band query finds them at their distance.
+fn real_meshes_bvh_equals_brute_force(n: usize) {
     let Some(meshes) = real_meshes() else { return };
     for (name, mesh) in &meshes {
         let diag = bbox_diagonal(mesh);
         let bvh = MeshBvh::new(mesh);
         assert_eq!(bvh.num_triangles(), mesh.num_faces());
-        let pts = sample_points(mesh, 10_000, 42);
+        let pts = sample_points(mesh, n, 42);
         let max_err = compare_with_brute(mesh, &bvh, &pts);
         println!(
             "{name}: {} faces, max |d_bvh − d_brute| = {max_err:.3e} ({:.3e} of diagonal)",
@@ -197,6 +199,20 @@ fn real_meshes_bvh_equals_brute_force() {
                 assert!(bvh.closest_point_within(p, d * (1.0 - 1e-6)).is_none());
             }
         }
+    }
+}
+
+#[test]
+fn real_meshes_bvh_equals_brute_force_on_2000_points() {
+    real_meshes_bvh_equals_brute_force(2_000);
+}
+
+mod slow {
+    /// The same on 10,000 points per mesh (the brute-force scans are most of the time).
+    #[test]
+    #[ignore = "slow: run by tests/run_slow.sh"]
+    fn real_meshes_bvh_equals_brute_force_on_10000_points() {
+        super::real_meshes_bvh_equals_brute_force(10_000);
     }
 }
 

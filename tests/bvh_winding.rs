@@ -339,7 +339,7 @@ fn out_of_range_options_are_clamped() {
 /// throughput on the cortex (100,000 points of the same mix, all threads, best of 5).
 /// `WINDING_SWEEP_ORDERS` and `WINDING_SWEEP_BETAS` (comma-separated) override the grid.
 #[test]
-#[ignore]
+#[ignore = "measurement, not a check: cargo test --release --test bvh_winding -- --ignored --nocapture"]
 fn winding_order_beta_sweep() {
     let Some(meshes) = real_meshes() else { return };
     let list = |key: &str, default: &str| -> Vec<f64> {

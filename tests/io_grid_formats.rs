@@ -450,7 +450,7 @@ fn vtk_reads_the_vti_when_available() {
     write_vti(&path, &g).unwrap();
     let v = run_python(VTK_READ, &[&path]);
     if v["vtk"].is_null() {
-        println!("skipping: the oracle's Python has no vtk package");
+        skip("the oracle's Python has no vtk package");
         return;
     }
     println!(

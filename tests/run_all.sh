@@ -1,23 +1,43 @@
 #!/usr/bin/env bash
-# The project's single test command: Rust tests, the Python reference oracle's own tests, and the
-# quick foundation benchmark. Run from anywhere; extra arguments go to `cargo test`.
+# The project's test command (what CI runs): the Rust tests and the Python reference oracle's own
+# tests, a few minutes from a warm build. Run from anywhere; extra arguments go to `cargo test`.
 #
-#   tests/run_all.sh                 # everything
-#   tests/run_all.sh --test io       # cargo test --release --test io, then the rest
+#   bash tests/run_all.sh                 # the quick suite
+#   bash tests/run_all.sh --test io       # cargo test --release --test io, then pytest
+#   bash tests/run_slow.sh                # the slow real-mesh studies only (= run_all.sh --slow)
 #
+# The slow studies are Rust tests in a module `slow` marked
+# #[ignore = "slow: run by tests/run_slow.sh"]; the quick suite keeps a cheaper case of each.
+# Benchmarks (cargo bench --bench NAME) are not tests and run apart (README).
+#
+# Tests that skip checks (no ../shared/data/real, no vtk in the venv) record a line in the file
+# $VESSELMSR_SKIPPED (tests/common/mod.rs `skip`), listed in the summary with the ignored tests.
 # The oracle venv (reference/.venv) is created on first use and rebuilt whenever
 # reference/requirements.txt changes (its sha256 is stamped inside the venv).
 set -euo pipefail
+
+slow=false
+if [[ "${1:-}" == "--slow" ]]; then
+    slow=true
+    shift
+fi
 
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 ROOT="$(pwd)"
 VENV="$ROOT/reference/.venv"
 REQ="$ROOT/reference/requirements.txt"
 STAMP="$VENV/.requirements.sha256"
+if $slow; then steps=2; else steps=3; fi
 
-step() { printf '\n==== %s\n' "$*"; }
+step() { printf '\n==== [%s/%s] %s\n' "$1" "$steps" "${*:2}"; }
 
-step "[1/4] Python oracle venv (reference/.venv)"
+WORK="$(mktemp -d)"
+trap 'rm -rf "$WORK"' EXIT
+export VESSELMSR_SKIPPED="$WORK/skipped"
+: >"$VESSELMSR_SKIPPED"
+LOG="$WORK/cargo-test.log"
+
+step 1 "Python oracle venv (reference/.venv)"
 want="$(sha256sum "$REQ" | cut -d' ' -f1)"
 have="$(cat "$STAMP" 2>/dev/null || true)"
 if [[ ! -x "$VENV/bin/python" || "$want" != "$have" ]]; then
@@ -33,15 +53,72 @@ else
 fi
 export VESSELMSR_PYTHON="$VENV/bin/python"
 
-step "[2/4] cargo test --release $*"
-cargo test --release "$@"
+rust_start=$SECONDS
+if $slow; then
+    step 2 "cargo test --release $* -- --ignored slow:: (the slow real-mesh studies)"
+    cargo_args=(--release --no-fail-fast "$@" -- --ignored slow::)
+else
+    step 2 "cargo test --release $*"
+    cargo_args=(--release --no-fail-fast "$@")
+fi
+rust_status=0
+cargo test "${cargo_args[@]}" 2>&1 | tee "$LOG" || rust_status=$?
+rust_seconds=$((SECONDS - rust_start))
 
-step "[3/4] pytest reference (oracle self-tests)"
-"$VESSELMSR_PYTHON" -m pytest -q reference
+py_status=0
+py_seconds=0
+if ! $slow && [[ $rust_status -eq 0 ]]; then
+    step 3 "pytest reference (oracle self-tests)"
+    py_start=$SECONDS
+    "$VESSELMSR_PYTHON" -m pytest -q reference || py_status=$?
+    py_seconds=$((SECONDS - py_start))
+fi
 
-step "[4/4] cargo bench --bench foundation (quick benchmark)"
-# A quick benchmark binary; skipped while benches/foundation.rs does not exist.
-if [[ -f benches/foundation.rs ]]; then cargo bench --bench foundation; else echo "skipped: no benches/foundation.rs"; fi
+# Summary: counts of the Rust tests, the ignored tests by reason, the tests that skipped checks.
+echo
+echo "==== summary"
+awk '/^test result:/ {
+        for (i = 1; i <= NF; i++) {
+            if ($(i) ~ /^passed;?$/) p += $(i - 1);
+            if ($(i) ~ /^failed;?$/) f += $(i - 1);
+            if ($(i) ~ /^ignored;?$/) g += $(i - 1);
+        }
+     }
+     END { printf "rust tests: %d passed, %d failed, %d ignored\n", p, f, g }' "$LOG"
+# "Running tests/x.rs (…)" names the binary of the "test NAME ... ignored, REASON" lines after it.
+ignored="$(awk '/^ *Running / { bin = $2; sub(/^tests\//, "", bin); sub(/\.rs$/, "", bin) }
+                / \.\.\. ignored/ { name = $2; reason = $0; sub(/.* \.\.\. ignored,? ?/, "", reason);
+                                    if (reason == "") reason = "no reason given";
+                                    print "  " bin " " name ": " reason }' "$LOG")"
+if [[ -n "$ignored" ]]; then
+    n_ignored=$(grep -c . <<<"$ignored")
+    n_slow=$(grep -c ': slow:' <<<"$ignored" || true)
+    if $slow; then
+        echo "ignored and not run ($n_ignored):"
+    else
+        echo "ignored ($n_ignored; $n_slow slow, run by bash tests/run_slow.sh):"
+    fi
+    echo "$ignored"
+fi
+if [[ -s "$VESSELMSR_SKIPPED" ]]; then
+    echo "skipped checks ($(sort -u "$VESSELMSR_SKIPPED" | grep -c .) tests skipped all or part of their checks):"
+    sort -u "$VESSELMSR_SKIPPED" | sed 's/^/  /'
+else
+    echo "skipped checks: none"
+fi
+if $slow; then
+    echo "time: cargo test ${rust_seconds} s"
+else
+    echo "time: cargo test ${rust_seconds} s, pytest ${py_seconds} s"
+fi
 
 echo
-echo "run_all: all steps passed"
+if [[ $rust_status -ne 0 || $py_status -ne 0 ]]; then
+    echo "run_all: FAILED (cargo test exit $rust_status, pytest exit $py_status)"
+    exit 1
+fi
+if $slow; then
+    echo "run_slow: all slow tests passed"
+else
+    echo "run_all: all steps passed"
+fi

@@ -29,14 +29,40 @@ pub const REAL_MESHES: [(&str, usize, usize, usize, bool); 6] = [
     ("cortex_rh_pial_fsaverage5.stl", 10242, 20480, 0, true),
 ];
 
-/// The folder of real meshes, or None (with a printed notice) when ../shared is absent.
+/// The folder of real meshes, or None (with the notice of [`skip`]) when ../shared is absent.
 pub fn real_dir() -> Option<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/real");
     if dir.is_dir() {
         Some(dir)
     } else {
-        println!("skipping: ../shared/data/real not found");
+        skip("../shared/data/real not found");
         None
+    }
+}
+
+/// Says that the running test skips its checks (or part of them) for `reason`: prints
+/// "skipping: {reason}" and, when $VESSELMSR_SKIPPED names a file (tests/run_all.sh sets it and
+/// lists the file in its summary), appends the line "{test binary} {test}: {reason}" to it.
+pub fn skip(reason: &str) {
+    use std::io::Write;
+    println!("skipping: {reason}");
+    let Some(path) = std::env::var_os("VESSELMSR_SKIPPED") else {
+        return;
+    };
+    // libtest runs each test on a thread named after it.
+    let test = std::thread::current().name().unwrap_or("?").to_string();
+    let line = format!("{} {test}: {reason}\n", env!("CARGO_CRATE_NAME"));
+    // One short write in append mode: lines of tests running at once do not mix.
+    let written = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .and_then(|mut f| f.write_all(line.as_bytes()));
+    if let Err(e) = written {
+        println!(
+            "could not record the skip in {}: {e}",
+            Path::new(&path).display()
+        );
     }
 }
 
