@@ -199,29 +199,24 @@ fn repair_measures_along_the_centerline() {
     let d = dir.path();
     let (damaged, truth) = stenosis_phantom(d);
     let healthy_radius = 3.0;
-    let report = d.join("rep.json");
-    let out = d.join("out.stl");
-    let mut seen = Vec::new();
-    for factor in [1.5, 2.0, 2.5, 3.0] {
-        let region = format!("0,0,0,{}", factor * healthy_radius);
-        let run = vesselmsr(&[
-            "repair",
-            s(&damaged),
-            "--region",
-            &region,
-            "-o",
-            s(&out),
-            "--report",
-            s(&report),
-            "--quiet",
-        ]);
+    // Runs `repair ARGS -o out.stl --report rep.json` and returns the report.
+    let repair = |args: &[&str]| -> serde_json::Value {
+        let (out, report) = (d.join("out.stl"), d.join("rep.json"));
+        let mut all = vec!["repair"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["-o", s(&out), "--report", s(&report), "--quiet"]);
+        let run = vesselmsr(&all);
         assert!(
             run.status.success(),
             "{}",
             String::from_utf8_lossy(&run.stderr)
         );
-        let r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+        serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap()
+    };
+    let mut seen = Vec::new();
+    for factor in [1.5, 2.0, 2.5, 3.0] {
+        let region = format!("0,0,0,{}", factor * healthy_radius);
+        let r = repair(&[s(&damaged), "--region", &region]);
         let g = &r["regions"][0];
         assert_eq!(g["stenosis_method"], "centerline");
         let (dia, nascet) = (
@@ -239,19 +234,7 @@ fn repair_measures_along_the_centerline() {
         "NASCET moves by {spread} points with the region's radius"
     );
     // A healthy vessel reports under 5%.
-    let run = vesselmsr(&[
-        "repair",
-        s(&truth),
-        "--region",
-        "0,3,0,4.5",
-        "-o",
-        s(&out),
-        "--report",
-        s(&report),
-        "--quiet",
-    ]);
-    assert!(run.status.success());
-    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let r = repair(&[s(&truth), "--region", "0,3,0,4.5"]);
     let g = &r["regions"][0];
     println!(
         "healthy: diameter {}%, NASCET {}%",
@@ -261,19 +244,7 @@ fn repair_measures_along_the_centerline() {
     // A point picked in the narrowing is sized by the healthy radius (1.5 R), not the narrowed.
     let picked = d.join("pick.json");
     std::fs::write(&picked, r#"{"points": [[0, 1.6, 0]]}"#).unwrap();
-    let run = vesselmsr(&[
-        "repair",
-        s(&damaged),
-        "--regions",
-        s(&picked),
-        "-o",
-        s(&out),
-        "--report",
-        s(&report),
-        "--quiet",
-    ]);
-    assert!(run.status.success());
-    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let r = repair(&[s(&damaged), "--regions", s(&picked)]);
     let radius = r["regions"][0]["radius"].as_f64().unwrap();
     println!("picked point: region radius {radius:.3} (1.5 x healthy {healthy_radius})");
     assert!((radius - 1.5 * healthy_radius).abs() <= 0.15 * healthy_radius);

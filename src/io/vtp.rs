@@ -457,6 +457,19 @@ fn xml_escape(s: &str) -> Cow<'_, str> {
     quick_xml::escape::escape(s)
 }
 
+/// The data arrays of one section, borrowed for writing.
+fn array_payloads(list: &[DataArray]) -> Vec<Payload<'_>> {
+    list.iter()
+        .map(|a| {
+            Payload::Values(Out {
+                name: &a.name,
+                components: a.components,
+                values: Cow::Borrowed(&a.values),
+            })
+        })
+        .collect()
+}
+
 pub(super) fn write_file(
     w: &mut dyn Write,
     data: &PolyData,
@@ -471,32 +484,8 @@ pub(super) fn write_file(
     });
     let empty: &[Vec<u32>] = &[];
     let sections: [(&str, Vec<Payload>); 7] = [
-        (
-            "PointData",
-            data.point_data
-                .iter()
-                .map(|a| {
-                    Payload::Values(Out {
-                        name: &a.name,
-                        components: a.components,
-                        values: Cow::Borrowed(&a.values),
-                    })
-                })
-                .collect(),
-        ),
-        (
-            "CellData",
-            data.cell_data
-                .iter()
-                .map(|a| {
-                    Payload::Values(Out {
-                        name: &a.name,
-                        components: a.components,
-                        values: Cow::Borrowed(&a.values),
-                    })
-                })
-                .collect(),
-        ),
+        ("PointData", array_payloads(&data.point_data)),
+        ("CellData", array_payloads(&data.cell_data)),
         ("Points", vec![points]),
         ("Verts", cell_payloads(empty).into()),
         ("Lines", cell_payloads(&data.lines).into()),
