@@ -40,7 +40,7 @@
 
 mod common;
 
-use common::Reference;
+use common::{load, Reference};
 use serde_json::Value;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -146,12 +146,6 @@ fn num(v: &Value, key: &str, digits: usize) -> String {
         },
         _ => "-".into(),
     }
-}
-
-fn load() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|_| "unknown".into())
 }
 
 fn main() {

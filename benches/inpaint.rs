@@ -66,7 +66,7 @@
 
 mod common;
 
-use common::Reference;
+use common::{load, Reference};
 use nalgebra::Point3;
 use std::collections::HashSet;
 use std::ffi::OsString;
@@ -835,12 +835,6 @@ fn speed(case: &RealCase, reference: Option<&Reference>) {
         volume_in_ball(&case.mesh, &case.ball),
         volume_in_ball(&ours.mesh, &case.ball)
     );
-}
-
-fn load() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|_| "unknown".into())
 }
 
 fn main() {

@@ -10,7 +10,6 @@ mod common;
 use common::{assert_fails, vesselmsr, vesselmsr_json};
 use nalgebra::Point3;
 use std::path::Path;
-use std::process::Command;
 use vesselmsr::io::{read_centerline_json, write_mesh};
 use vesselmsr::mesh::primitives::{icosphere, open_tube};
 use vesselmsr::TriMesh;
@@ -57,22 +56,10 @@ fn centerline_json_and_vtp_of_the_aorta() {
     let script = "import sys, vtk\n\
 r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update()\n\
 d = r.GetOutput(); pd = d.GetPointData()\n\
-print(d.GetNumberOfLines(), d.GetNumberOfPoints(), pd.GetArray('Radius').GetNumberOfTuples(), pd.GetArray('BranchId').GetRange()[1], pd.GetArray('Radius').GetRange()[1])";
-    let run = Command::new(common::python())
-        .args(["-c", script, s(&vtp)])
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let text = String::from_utf8_lossy(&run.stdout);
-    println!("vtk reads: {text}");
-    let f: Vec<f64> = text
-        .split_whitespace()
-        .map(|w| w.parse().unwrap())
-        .collect();
+print([d.GetNumberOfLines(), d.GetNumberOfPoints(), pd.GetArray('Radius').GetNumberOfTuples(), pd.GetArray('BranchId').GetRange()[1], pd.GetArray('Radius').GetRange()[1]])";
+    let v = common::run_python(script, &[&vtp]);
+    println!("vtk reads: {v}");
+    let f: Vec<f64> = serde_json::from_value(v).unwrap();
     let points: usize = cl.branches.iter().map(|b| b.points.len()).sum();
     let max_r = cl
         .branches

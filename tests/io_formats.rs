@@ -10,31 +10,6 @@ use std::time::Instant;
 use vesselmsr::io::{read_mesh, read_ply_scalars, write_mesh, write_mesh_with_scalars, MeshFormat};
 use vesselmsr::TriMesh;
 
-/// An octahedron with coordinates that f32 cannot hold exactly (so OBJ/PLY exactness is tested),
-/// listed in an order unrelated to first use by the faces.
-fn odd_octahedron() -> TriMesh {
-    let c = [
-        [0.1 + 0.2, 1.0 / 3.0, -1e-7],
-        [-2.0 / 3.0, 0.7, 12345.678901234567],
-        [std::f64::consts::PI, -0.0, 5e-12],
-        [1.0, -std::f64::consts::E, 0.3],
-        [0.25, 0.5, 2.0f64.sqrt()],
-        [-1.1, -2.2, -3.3e5],
-    ];
-    let vertices = c.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
-    let faces = vec![
-        [4, 0, 1],
-        [4, 1, 3],
-        [4, 3, 2],
-        [4, 2, 0],
-        [5, 1, 0],
-        [5, 3, 1],
-        [5, 2, 3],
-        [5, 0, 2],
-    ];
-    TriMesh::new(vertices, faces)
-}
-
 /// The unit cube as binary STL triangles.
 fn cube_triangles() -> Vec<[[f32; 3]; 3]> {
     stl_triangles(&cube(0.0, 1.0))

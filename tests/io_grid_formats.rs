@@ -7,29 +7,10 @@ mod common;
 use common::*;
 use nalgebra::Point3;
 use rand::RngExt;
-use serde_json::Value;
-use std::ffi::OsStr;
-use std::process::Command;
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::io::{
     npy_sidecar_path, read_npy, read_nrrd, read_vti, write_npy, write_nrrd, write_vti,
 };
-
-/// Runs `script` with the oracle's Python and `args`, returning its stdout parsed as JSON.
-fn run_python(script: &str, args: &[&dyn AsRef<OsStr>]) -> Value {
-    let out = Command::new(python())
-        .arg("-c")
-        .arg(script)
-        .args(args.iter().map(|a| a.as_ref()))
-        .output()
-        .expect("python runs");
-    assert!(
-        out.status.success(),
-        "python failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("python prints JSON")
-}
 
 /// A grid with distinct values (including −0, a subnormal and large magnitudes), non-cubic dims
 /// and an origin that is not a round number.

@@ -7,36 +7,10 @@
 mod common;
 use base64::Engine;
 use common::*;
-use nalgebra::Point3;
 use std::io::Write;
 use std::path::Path;
-use std::process::Command;
 use vesselmsr::io::*;
-use vesselmsr::{Error, TriMesh};
-
-/// An octahedron whose coordinates f32 cannot hold (so exactness is tested).
-fn odd_octahedron() -> TriMesh {
-    let c = [
-        [0.1 + 0.2, 1.0 / 3.0, -1e-7],
-        [-2.0 / 3.0, 0.7, 12345.678901234567],
-        [std::f64::consts::PI, -0.0, 5e-12],
-        [1.0, -std::f64::consts::E, 0.3],
-        [0.25, 0.5, 2.0f64.sqrt()],
-        [-1.1, -2.2, -3.3e5],
-    ];
-    let vertices = c.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
-    let faces = vec![
-        [4, 0, 1],
-        [4, 1, 3],
-        [4, 3, 2],
-        [4, 2, 0],
-        [5, 1, 0],
-        [5, 3, 1],
-        [5, 2, 3],
-        [5, 0, 2],
-    ];
-    TriMesh::new(vertices, faces)
-}
+use vesselmsr::Error;
 
 /// Points, a triangle, a quad, two polylines, and point and cell data of every value type,
 /// one array with 2 and one with 5 components, names needing escapes in XML and legacy VTK.
@@ -268,6 +242,27 @@ fn vtp_pieces_verts_and_strips() {
     assert_eq!(mesh.num_faces(), 6);
 }
 
+/// Numbers that know their bytes in either byte order (for hand-built VTK files).
+trait EndianBytes: Copy {
+    fn bytes(self, big: bool) -> Vec<u8>;
+}
+
+macro_rules! endian_bytes {
+    ($($t:ty),*) => {$(
+        impl EndianBytes for $t {
+            fn bytes(self, big: bool) -> Vec<u8> {
+                if big { self.to_be_bytes().to_vec() } else { self.to_le_bytes().to_vec() }
+            }
+        }
+    )*};
+}
+endian_bytes!(f32, i64, f64);
+
+/// `values` as raw bytes, big or little endian.
+fn packed<T: EndianBytes>(values: &[T], big: bool) -> Vec<u8> {
+    values.iter().flat_map(|x| x.bytes(big)).collect()
+}
+
 /// VTK's default writer layout: zlib-compressed blocks, UInt32 headers, the header base64-encoded
 /// apart from the data; here inline (format="binary") and in base64 appended data, and big endian.
 #[test]
@@ -308,44 +303,11 @@ fn vtp_compressed_and_big_endian_as_vtk_writes_them() {
     let detail: [f64; 4] = [0.25, -1.0, 1e300, 7.0];
     for big in [false, true] {
         let bytes = |v: &[u8]| v.to_vec();
-        let f32s = |v: &[f32]| {
-            v.iter()
-                .flat_map(|x| {
-                    if big {
-                        x.to_be_bytes()
-                    } else {
-                        x.to_le_bytes()
-                    }
-                })
-                .collect::<Vec<u8>>()
-        };
-        let i64s = |v: &[i64]| {
-            v.iter()
-                .flat_map(|x| {
-                    if big {
-                        x.to_be_bytes()
-                    } else {
-                        x.to_le_bytes()
-                    }
-                })
-                .collect::<Vec<u8>>()
-        };
-        let f64s = |v: &[f64]| {
-            v.iter()
-                .flat_map(|x| {
-                    if big {
-                        x.to_be_bytes()
-                    } else {
-                        x.to_le_bytes()
-                    }
-                })
-                .collect::<Vec<u8>>()
-        };
         let arrays = [
-            ("Float32", "Points", 3, f32s(&pts)),
-            ("Int64", "connectivity", 1, i64s(&conn)),
-            ("Int64", "offsets", 1, i64s(&offs)),
-            ("Float64", "detail", 1, f64s(&detail)),
+            ("Float32", "Points", 3, packed(&pts, big)),
+            ("Int64", "connectivity", 1, packed(&conn, big)),
+            ("Int64", "offsets", 1, packed(&offs, big)),
+            ("Float64", "detail", 1, packed(&detail, big)),
             ("UInt8", "flag", 1, bytes(&[1, 0, 0, 1])),
         ];
         let order = if big { "BigEndian" } else { "LittleEndian" };
@@ -732,18 +694,7 @@ fn vtk_reads_our_lines_polygons_and_data() {
         } else {
             write_vtk_legacy(&path, &pd).unwrap();
         }
-        let out = Command::new(python())
-            .arg("-c")
-            .arg(VTK_READ)
-            .arg(&path)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let v = run_python(VTK_READ, &[&path]);
         assert_eq!(v["messages"], serde_json::json!([]), "{name}");
         let points: Vec<[f64; 3]> = serde_json::from_value(v["points"].clone()).unwrap();
         assert_eq!(points, pd.points, "{name}");

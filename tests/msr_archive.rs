@@ -125,18 +125,7 @@ out["phi_k_j_i"] = float(z["phi"][1, 2, 3])
 out["faces_row"] = [int(v) for v in z["faces"][2]]
 print(json.dumps(out))
 "#;
-    let out = std::process::Command::new(python())
-        .arg("-c")
-        .arg(script)
-        .arg(&path)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = run_python(script, &[&path]);
     println!("{v}");
     let shape = |k: &str| v[k]["shape"].clone();
     assert_eq!(v["format"], "vesselmsr-msr");

@@ -147,3 +147,11 @@ pub fn read_f64s(path: &Path) -> Option<Vec<f64>> {
             .collect(),
     )
 }
+
+/// The machine's load averages (1, 5, 15 minutes) for the bench's header; "unknown" without
+/// /proc/loadavg.
+pub fn load() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "unknown".into())
+}

@@ -256,3 +256,11 @@ pub fn write_mesh_with_fields(
         _ => write_vtk_legacy(path, &data),
     }
 }
+
+/// Appends the fan of `corners.len() − 2` triangles from the first corner of a polygon (the
+/// readers' triangulation of OBJ, PLY and VTK polygons; the caller has checked ≥ 3 corners).
+pub(crate) fn fan_triangulate(corners: &[u32], faces: &mut Vec<[u32; 3]>) {
+    for i in 1..corners.len().saturating_sub(1) {
+        faces.push([corners[0], corners[i], corners[i + 1]]);
+    }
+}

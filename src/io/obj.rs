@@ -11,6 +11,7 @@
 //! out-of-range negative texture indices (e.g. `f 1/-5 2/-5 3/-5` with one `vt`), reads f32 unless
 //! a feature is enabled, reorders vertices by first use, and reports errors without line numbers.
 
+use super::fan_triangulate;
 use super::text::show;
 use crate::TriMesh;
 use nalgebra::Point3;
@@ -71,9 +72,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<TriMesh, String> {
                         corners.len()
                     ));
                 }
-                for i in 1..corners.len() - 1 {
-                    faces.push([corners[0], corners[i], corners[i + 1]]);
-                }
+                fan_triangulate(&corners, &mut faces);
             }
             _ => {}
         }

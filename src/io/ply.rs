@@ -526,9 +526,7 @@ fn read_faces(body: &mut Body, e: &Element) -> Result<Vec<[u32; 3]>, String> {
                     corners.len()
                 ));
             }
-            for j in 1..corners.len() - 1 {
-                faces.push([corners[0], corners[j], corners[j + 1]]);
-            }
+            super::fan_triangulate(&corners, &mut faces);
         }
     }
     Ok(faces)

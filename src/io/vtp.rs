@@ -250,9 +250,7 @@ impl PolyData {
                     poly.len()
                 ));
             }
-            for i in 1..poly.len() - 1 {
-                faces.push([poly[0], poly[i], poly[i + 1]]);
-            }
+            super::fan_triangulate(poly, &mut faces);
         }
         let vertices = self
             .points
@@ -1347,28 +1345,23 @@ fn read_piece(
             ends,
         )?;
     }
-    let mut point_data = Vec::new();
-    for desc in &piece.point_data {
-        let Some(ty) = desc.ty else { continue };
-        let numbers = decode(desc, file, bytes, ends)
-            .map_err(|m| format!("point data '{}': {m}", desc.name))?;
-        point_data.push(DataArray {
-            name: desc.name.clone(),
-            components: desc.components,
-            values: data_values(numbers, ty),
-        });
-    }
-    let mut cell_data = Vec::new();
-    for desc in &piece.cell_data {
-        let Some(ty) = desc.ty else { continue };
-        let numbers = decode(desc, file, bytes, ends)
-            .map_err(|m| format!("cell data '{}': {m}", desc.name))?;
-        cell_data.push(DataArray {
-            name: desc.name.clone(),
-            components: desc.components,
-            values: data_values(numbers, ty),
-        });
-    }
+    let section =
+        |descs: &[ArrayDesc], what: &str| -> std::result::Result<Vec<DataArray>, String> {
+            let mut out = Vec::new();
+            for desc in descs {
+                let Some(ty) = desc.ty else { continue };
+                let numbers = decode(desc, file, bytes, ends)
+                    .map_err(|m| format!("{what} '{}': {m}", desc.name))?;
+                out.push(DataArray {
+                    name: desc.name.clone(),
+                    components: desc.components,
+                    values: data_values(numbers, ty),
+                });
+            }
+            Ok(out)
+        };
+    let point_data = section(&piece.point_data, "point data")?;
+    let cell_data = section(&piece.cell_data, "cell data")?;
     assemble(points, cells, point_data, cell_data)
 }
 

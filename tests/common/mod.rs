@@ -238,3 +238,19 @@ impl Oracle {
 pub fn rng(seed: u64) -> rand::rngs::StdRng {
     rand::SeedableRng::seed_from_u64(seed)
 }
+
+/// Runs `script` with the oracle's Python and `args`, returning its stdout parsed as JSON.
+pub fn run_python(script: &str, args: &[&dyn AsRef<std::ffi::OsStr>]) -> Value {
+    let out = Command::new(python())
+        .arg("-c")
+        .arg(script)
+        .args(args.iter().map(|a| a.as_ref()))
+        .output()
+        .expect("python runs");
+    assert!(
+        out.status.success(),
+        "python failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("python prints JSON")
+}

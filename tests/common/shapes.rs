@@ -1,5 +1,5 @@
 //! Test shapes built on `vesselmsr::mesh::primitives`: the cube [lo, hi]³, whole or with one
-//! side left open.
+//! side left open; an octahedron with coordinates f32 cannot hold (for the formats' exactness).
 
 use nalgebra::Point3;
 use vesselmsr::mesh::primitives::box_mesh;
@@ -21,4 +21,29 @@ pub fn cube_without_side(lo: f64, hi: f64, side: usize) -> TriMesh {
         .retain(|f| !f.iter().all(|&v| vertices[v as usize][axis] == at));
     assert_eq!(mesh.num_faces(), before - 2, "side {side} of the cube");
     mesh
+}
+
+/// An octahedron with coordinates that f32 cannot hold exactly (so OBJ/PLY exactness is tested),
+/// listed in an order unrelated to first use by the faces.
+pub fn odd_octahedron() -> TriMesh {
+    let c = [
+        [0.1 + 0.2, 1.0 / 3.0, -1e-7],
+        [-2.0 / 3.0, 0.7, 12345.678901234567],
+        [std::f64::consts::PI, -0.0, 5e-12],
+        [1.0, -std::f64::consts::E, 0.3],
+        [0.25, 0.5, 2.0f64.sqrt()],
+        [-1.1, -2.2, -3.3e5],
+    ];
+    let vertices = c.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
+    let faces = vec![
+        [4, 0, 1],
+        [4, 1, 3],
+        [4, 3, 2],
+        [4, 2, 0],
+        [5, 1, 0],
+        [5, 3, 1],
+        [5, 2, 3],
+        [5, 0, 2],
+    ];
+    TriMesh::new(vertices, faces)
 }
