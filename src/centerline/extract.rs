@@ -11,7 +11,7 @@ use crate::grid::{grid_for_mesh, GridOptions};
 use crate::inpaint::holes::{classify_loops, LoopKind, LoopOptions};
 use crate::levelset::chamfer::chamfer_inside;
 use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
-use crate::mesh::cap::{cap_holes, CapOptions};
+use crate::mesh::cap::{cap_holes, cap_loops_with_fans, CapOptions};
 use crate::mesh::measures::{
     area, area_centroid, bounding_box, mean_edge_length, signed_volume_about,
 };
@@ -114,9 +114,25 @@ pub fn compute_centerline(
         .map(|l| (l.center, l.radius))
         .collect();
 
+    // The grid's signs come from a closed surface: open ends closed by centroid fans (ray
+    // crossings are exact and several times cheaper than the winding number of an open mesh;
+    // the fans are planar enough where the winding number's own closure would be). The curve is
+    // refined on the mesh itself.
+    let end_loops: Vec<Vec<u32>> = loops
+        .iter()
+        .filter(|l| l.kind == LoopKind::End && holes == 0)
+        .map(|l| l.vertices.clone())
+        .collect();
+    let fanned;
+    let closed = if end_loops.is_empty() {
+        mesh
+    } else {
+        fanned = cap_loops_with_fans(mesh, &end_loops);
+        &fanned
+    };
     let spec = grid_for_mesh(mesh, &centerline_grid(mesh, &opts.grid))?;
     let vox = VoxelizeOptions::default();
-    let mut phi = voxelize(mesh, spec.dims, spec.transform, &vox).map_err(|e| match e {
+    let mut phi = voxelize(closed, spec.dims, spec.transform, &vox).map_err(|e| match e {
         Error::Geometry(m) if m.contains("encloses no volume") => {
             Error::Geometry("the mesh has no inside (it encloses no volume): no centreline".into())
         }

@@ -22,10 +22,11 @@
 //!   are joined along the surface by no crossing-free edge that could carry the news. Every
 //!   node left unevaluated is then farther than h from the surface, so all its edges are
 //!   crossing-free.
-//! * A breadth-first flood from the seeds over crossing-free edges gives every other node the
-//!   sign of its nearest seed; a node the flood never reaches (a pocket without a seed) is
-//!   evaluated and flooded from in turn.
-//! * Fronts: for an open mesh w is not piecewise constant, and |w| = ½ on a "virtual cap" spanning
+//! * A breadth-first flood from the seeds over crossing-free edges, run by spans of grid rows
+//!   (see `SpanFlood`), gives every other node the sign of a seed joined to it; a node the flood
+//!   never reaches (a pocket without a seed) is evaluated and flooded from in turn.
+//! * Fronts (open meshes only; on a closed one every seed is exact and w is constant along
+//!   crossing-free edges): for an open mesh w is not piecewise constant, and |w| = ½ on a "virtual cap" spanning
 //!   each hole, away from the triangles. Wherever a crossing-free edge joins nodes of opposite
 //!   signs, each unevaluated end is evaluated; a node whose sign changes makes its disagreeing
 //!   unevaluated neighbours the next front; repeat until no front is left. At the end every
@@ -36,6 +37,7 @@
 
 use rayon::prelude::*;
 use std::collections::VecDeque;
+use std::ops::RangeInclusive;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::OnceLock;
 
@@ -192,45 +194,57 @@ pub(super) fn assign_signs(
     }
 
     // Flood from the seeds; pockets without a seed are evaluated and flooded from in turn.
-    let mut queue: VecDeque<u32> = seeds.into();
-    let flood = |state: &mut [u8], queue: &mut VecDeque<u32>| {
-        while let Some(a) = queue.pop_front() {
-            let a = a as usize;
-            let sign = state[a] & NEG;
-            for_neighbours(layout, a, |b| {
-                if state[b] & ASSIGNED == 0 && free(a, b) {
-                    state[b] |= ASSIGNED | sign;
-                    queue.push_back(b as u32);
-                }
-            });
-        }
-    };
-    flood(state, &mut queue);
+    let mut flood = SpanFlood::new(layout, dist, hf);
+    for &s in &seeds {
+        flood.seed(state, s as usize);
+    }
+    flood.run(state);
     for idx in 0..state.len() {
         if state[idx] & ASSIGNED == 0 {
             let neg = inside(idx);
             state[idx] |= EVAL | ASSIGNED | if neg { NEG } else { 0 };
             counts.pockets += 1;
-            queue.push_back(idx as u32);
-            flood(state, &mut queue);
+            flood.seed(state, idx);
+            flood.run(state);
         }
     }
 
-    // Fronts: unevaluated ends of crossing-free edges whose ends disagree.
+    debug_assert!(state.iter().all(|s| s & ASSIGNED != 0));
+    // Fronts: unevaluated ends of crossing-free edges whose ends disagree. On a closed surface w
+    // is an integer, the same at both ends of a crossing-free edge, and every seed's count is
+    // exact: there are none to look for.
+    if matches!(source, SignSource::Rays { .. }) {
+        return counts;
+    }
     let state_ro: &[u8] = state;
-    let mut front: Vec<u32> = (0..state_ro.len())
+    let [_, _, nz] = layout.dims;
+    let mut front: Vec<u32> = (0..ny * nz)
         .into_par_iter()
-        .filter(|&a| {
-            if state_ro[a] & EVAL != 0 {
-                return false;
-            }
-            let mut differs = false;
-            for_neighbours(layout, a, |b| {
-                differs |= (state_ro[a] ^ state_ro[b]) & NEG != 0 && free(a, b);
-            });
-            differs
+        .flat_map_iter(|row| {
+            let (j, k) = (row % ny, row / ny);
+            let base = row * nx;
+            // Row offsets of the ±y and ±z neighbours that exist; ±x handled by i's bounds.
+            let across = [
+                (j > 0).then(|| base - nx),
+                (j + 1 < ny).then(|| base + nx),
+                (k > 0).then(|| base - layer_len),
+                (k + 1 < nz).then(|| base + layer_len),
+            ];
+            let differs = move |a: usize, b: usize| {
+                (state_ro[a] ^ state_ro[b]) & NEG != 0 && free(a, b)
+            };
+            (0..nx).filter_map(move |i| {
+                let a = base + i;
+                if state_ro[a] & EVAL != 0 {
+                    return None;
+                }
+                let mut d = (i > 0 && differs(a, a - 1)) || (i + 1 < nx && differs(a, a + 1));
+                for other in across.iter().flatten() {
+                    d = d || differs(a, other + i);
+                }
+                d.then_some(a as u32)
+            })
         })
-        .map(|a| a as u32)
         .collect();
     while !front.is_empty() {
         counts.front_rounds += 1;
@@ -256,7 +270,96 @@ pub(super) fn assign_signs(
             });
         }
     }
-    debug_assert!(state.iter().all(|s| s & ASSIGNED != 0));
     counts.refined = refined.into_inner();
     counts
+}
+
+/// Breadth-first flood over crossing-free edges, run by spans: maximal runs of a grid row joined
+/// by crossing-free x-edges, all given the sign of the node they grew from. A popped span scans
+/// the four rows beside it (±y, ±z) over its own x-range; an unassigned node there behind a
+/// crossing-free edge takes the span's sign and grows into a new span. Every node is assigned once
+/// and read from at most five spans, with no division per node, which is what makes it several
+/// times faster than a node-by-node queue over the mostly empty grid around a thin vessel.
+struct SpanFlood<'a> {
+    layout: &'a Layout,
+    dist: &'a [f32],
+    /// Crossing-free threshold: an edge a–b crosses no triangle when d(a) + d(b) > hf.
+    hf: f32,
+    /// Spans waiting to scan their neighbour rows: first and last node index (same row).
+    queue: VecDeque<(u32, u32)>,
+}
+
+impl<'a> SpanFlood<'a> {
+    fn new(layout: &'a Layout, dist: &'a [f32], hf: f32) -> Self {
+        SpanFlood {
+            layout,
+            dist,
+            hf,
+            queue: VecDeque::new(),
+        }
+    }
+
+    #[inline]
+    fn free(&self, a: usize, b: usize) -> bool {
+        self.dist[a] + self.dist[b] > self.hf
+    }
+
+    /// Grows the span through assigned node `a` over the unassigned nodes of its row joined to
+    /// it by crossing-free edges (they take a's sign), and queues it.
+    fn seed(&mut self, state: &mut [u8], a: usize) {
+        let span = self.grow(state, a);
+        self.queue
+            .push_back((*span.start() as u32, *span.end() as u32));
+    }
+
+    fn grow(&self, state: &mut [u8], a: usize) -> RangeInclusive<usize> {
+        let nx = self.layout.dims[0];
+        let row = a - a % nx;
+        let mark = ASSIGNED | (state[a] & NEG);
+        let mut lo = a;
+        while lo > row && state[lo - 1] & ASSIGNED == 0 && self.free(lo, lo - 1) {
+            lo -= 1;
+            state[lo] |= mark;
+        }
+        let mut hi = a;
+        while hi + 1 < row + nx && state[hi + 1] & ASSIGNED == 0 && self.free(hi, hi + 1) {
+            hi += 1;
+            state[hi] |= mark;
+        }
+        lo..=hi
+    }
+
+    /// Floods until no span is waiting.
+    fn run(&mut self, state: &mut [u8]) {
+        let [nx, ny, nz] = self.layout.dims;
+        let sz = nx * ny;
+        while let Some((lo, hi)) = self.queue.pop_front() {
+            let (lo, hi) = (lo as usize, hi as usize);
+            let jk = lo / nx;
+            let (j, k) = (jk % ny, jk / ny);
+            let offsets = [
+                (j > 0).then(|| -(nx as isize)),
+                (j + 1 < ny).then_some(nx as isize),
+                (k > 0).then(|| -(sz as isize)),
+                (k + 1 < nz).then_some(sz as isize),
+            ];
+            for off in offsets.into_iter().flatten() {
+                let mut a = lo;
+                while a <= hi {
+                    let b = a.wrapping_add_signed(off);
+                    if state[b] & ASSIGNED == 0 && self.free(a, b) {
+                        state[b] |= ASSIGNED | (state[a] & NEG);
+                        let span = self.grow(state, b);
+                        // The new span's nodes right of b are assigned now: skip past them.
+                        let end = span.end().wrapping_add_signed(-off);
+                        self.queue
+                            .push_back((*span.start() as u32, *span.end() as u32));
+                        a = end.max(a) + 1;
+                    } else {
+                        a += 1;
+                    }
+                }
+            }
+        }
+    }
 }

@@ -23,11 +23,14 @@
 //! oriented input gives a consistently oriented closed output; the result is finally flipped as a
 //! whole if its enclosed volume is negative.
 
+mod fan;
 mod fill;
 mod harmonic;
 mod improve;
 mod planar;
 mod weld;
+
+pub use fan::cap_loops_with_fans;
 
 use super::measures::{signed_volume, triangle_aspect_ratio};
 use super::topology::boundary_loops;
