@@ -130,7 +130,8 @@ pub fn compute_centerline(
         fanned = cap_loops_with_fans(mesh, &end_loops);
         &fanned
     };
-    let spec = grid_for_mesh(mesh, &centerline_grid(mesh, &opts.grid))?;
+    // The closed surface also gives the true enclosed volume, hence the typical radius.
+    let spec = grid_for_mesh(closed, &centerline_grid(closed, &opts.grid))?;
     let vox = VoxelizeOptions::default();
     let mut phi = voxelize(closed, spec.dims, spec.transform, &vox).map_err(|e| match e {
         Error::Geometry(m) if m.contains("encloses no volume") => {
