@@ -8,7 +8,8 @@ use crate::centerline::stenosis::StenosisFindOptions;
 use crate::centerline::{compute_centerline, CenterlineOptions};
 use crate::inpaint::holes::{hole_regions, LoopKind, LoopOptions};
 use crate::inpaint::region::{parse_ball, read_regions, validate_regions, Ball};
-use crate::inpaint::repair::{repair, InpaintMethod, RepairOptions};
+use crate::inpaint::guided::GuideKind;
+use crate::inpaint::repair::{repair_with_centerline, InpaintMethod, RepairOptions};
 use crate::io::{read_mesh, write_atomic, write_mesh, MeshFormat};
 use crate::mesh::info::mesh_info;
 use crate::report::repair_picture::{render_repair, RepairPictureOptions};
@@ -49,10 +50,12 @@ pub struct RepairArgs {
     /// mesh, min(mean edge / 2, longest side / 256)).
     #[arg(long, value_name = "H")]
     pub voxel: Option<f64>,
-    /// How D is filled: axial (the vessel carried across D along its axis; default), flow
-    /// (v = c + κ_a − κ with the data outside D restored), msr (a coarse level plus the details
-    /// transferred across D), paper (Algorithm 4 as written).
-    #[arg(long, default_value = "axial", value_name = "METHOD")]
+    /// How D is filled: centerline (the vessel continued across D along its centreline, with
+    /// its cross-section carried between the intact sections on either side; default), axial
+    /// (the vessel carried across D along a straight axis), flow (v = c + κ_a − κ with the data
+    /// outside D restored), msr (a coarse level plus the details transferred across D), paper
+    /// (Algorithm 4 as written).
+    #[arg(long, default_value = "centerline", value_name = "METHOD")]
     pub method: String,
     /// Growth speed c of v = c + κ_a − κ (flow, msr, paper), 1/length (default: from the vessel
     /// radius R around D: 0.3/R for flow, 1/R otherwise).
@@ -122,6 +125,9 @@ struct Parameters {
     #[serde(skip_serializing_if = "Option::is_none")]
     fallback: Option<String>,
     axes: Vec<[f64; 3]>,
+    /// The centreline fill's curves, by kind.
+    guides: Vec<GuideKind>,
+    notices: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -256,7 +262,7 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
         ..RepairOptions::default()
     };
     let bar = progress::spinner(ctx.quiet, "repairing");
-    let result = repair(&mesh, &balls, &opts)
+    let result = repair_with_centerline(&mesh, &balls, &opts, healthy.as_ref().map(|h| &h.centerline))
         .with_context(|| format!("{}: repair failed", args.mesh.display()))?;
     bar.set_message("measuring");
     let measure_start = Instant::now();
@@ -307,6 +313,8 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
             junctions: result.junctions,
             fallback: result.fallback.clone(),
             axes: result.axes.clone(),
+            guides: result.guides.clone(),
+            notices: result.notices.clone(),
         },
         timings,
     };
@@ -336,6 +344,9 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
     }
     bar.finish_and_clear();
     if !ctx.quiet {
+        for n in &result.notices {
+            eprintln!("vesselmsr: notice: {}: {n}", args.mesh.display());
+        }
         if let Some(why) = &result.fallback {
             eprintln!(
                 "vesselmsr: notice: the patch could not be stitched into the kept triangles ({why}); the whole vessel was re-meshed"

@@ -4,6 +4,7 @@
 
 pub mod axial;
 pub mod axis;
+pub mod guided;
 pub mod harmonic;
 pub mod holes;
 pub mod junction;

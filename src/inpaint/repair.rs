@@ -19,13 +19,16 @@
 //!    vessel with the filled sub-box. Check that the output is closed where the input was.
 
 use super::axial::fill_axial;
+use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions};
 use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::junction::{fill_junction, Branch};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{fill_msr, transfer_details, MsrFillOptions};
 use super::region::{deepest_ball, Ball};
-use super::stitch::{cut_out, stitch_patch};
+use super::stitch::{cut_out, stitch_patch, CutOut};
 use super::topology::remove_islands;
+use crate::bvh::MeshBvh;
+use crate::centerline::{compute_centerline, Centerline, CenterlineOptions};
 use crate::grid::{spec::default_voxel, Grid3, GridTransform, SubBox};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::redistance::{redistance, RedistanceOptions, RedistanceScheme};
@@ -45,6 +48,10 @@ use std::time::Instant;
 /// How D is filled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum InpaintMethod {
+    /// `centerline`: the vessel continued across D along its centreline, with its cross-section
+    /// interpolated between the intact sections on either side (`guided`); regions no vessel
+    /// passes through fall back to `axial`.
+    Centerline,
     /// `axial`: φ_0 carried across D along the vessel axis (`axial`), the winner on the phantoms.
     Axial,
     /// `msr`: one coarse level of v = c + κ_a − κ plus the details transferred harmonically
@@ -61,7 +68,8 @@ pub enum InpaintMethod {
 
 impl InpaintMethod {
     /// Every method, default first.
-    pub const ALL: [InpaintMethod; 4] = [
+    pub const ALL: [InpaintMethod; 5] = [
+        InpaintMethod::Centerline,
         InpaintMethod::Axial,
         InpaintMethod::Flow,
         InpaintMethod::Msr,
@@ -71,6 +79,7 @@ impl InpaintMethod {
     /// The name used on the command line.
     pub fn as_str(self) -> &'static str {
         match self {
+            InpaintMethod::Centerline => "centerline",
             InpaintMethod::Axial => "axial",
             InpaintMethod::Msr => "msr",
             InpaintMethod::Flow => "flow",
@@ -93,7 +102,7 @@ impl FromStr for InpaintMethod {
             .find(|m| m.as_str() == s)
             .ok_or_else(|| {
                 Error::Geometry(format!(
-                    "unknown inpainting method '{s}' (expected axial, flow, msr or paper)"
+                    "unknown inpainting method '{s}' (expected centerline, axial, flow, msr or paper)"
                 ))
             })
     }
@@ -103,7 +112,7 @@ impl FromStr for InpaintMethod {
 /// defaults of c, T and ε scale with the vessel radius R estimated around D.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RepairOptions {
-    /// The fill (default [`InpaintMethod::Axial`]).
+    /// The fill (default [`InpaintMethod::Centerline`]).
     pub method: InpaintMethod,
     /// Voxel h, world units; `None`: the default rule on the whole input mesh.
     pub voxel: Option<f64>,
@@ -133,7 +142,7 @@ pub struct RepairOptions {
 impl Default for RepairOptions {
     fn default() -> Self {
         RepairOptions {
-            method: InpaintMethod::Axial,
+            method: InpaintMethod::Centerline,
             voxel: None,
             keep_outside: true,
             open_ends: false,
@@ -180,6 +189,11 @@ pub struct Repair {
     pub stitched: bool,
     /// Why the stitch was not used, when it was not.
     pub fallback: Option<String>,
+    /// The curves of the `centerline` fill, by kind (a vessel through D, a gap bridged, a
+    /// junction branch, a dead end).
+    pub guides: Vec<GuideKind>,
+    /// One-line notices (regions filled another way than asked, and why).
+    pub notices: Vec<String>,
     /// Seconds per phase.
     pub timings: Vec<(String, f64)>,
 }
@@ -195,8 +209,20 @@ const AXIAL_CORE_VOXELS: f64 = 3.0;
 /// grazes it and a deeper cut would merge the patch's loops (see `stitch`).
 const STITCH_MARGINS_VOXELS: [f64; 8] = [1.5, 1.0, 0.75, 2.5, 3.5, 0.5, 0.25, 0.0];
 
-/// Repairs `mesh` inside the union of `balls` (see the module docs).
+/// Repairs `mesh` inside the union of `balls` (see the module docs). The `centerline` fill
+/// traces the input's centreline first; [`repair_with_centerline`] takes one already traced.
 pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Repair> {
+    repair_with_centerline(mesh, balls, opts, None)
+}
+
+/// [`repair`] with the input's centreline given (as traced by `compute_centerline` on `mesh`),
+/// for the `centerline` fill; `None` traces it when needed.
+pub fn repair_with_centerline(
+    mesh: &TriMesh,
+    balls: &[Ball],
+    opts: &RepairOptions,
+    centerline: Option<&Centerline>,
+) -> Result<Repair> {
     let mut timings = Vec::new();
     let mut clock = Instant::now();
     let mut lap = |name: &str, timings: &mut Vec<(String, f64)>| {
@@ -247,11 +273,11 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     // The fills that grow the shape (msr, paper, flow) move it by up to c·T: room for that too
     // (R is not known yet; the region's radius bounds it from above in practice).
     let growth = match opts.method {
-        InpaintMethod::Axial => 0.0,
+        InpaintMethod::Axial | InpaintMethod::Centerline => 0.0,
         _ => opts.speed.unwrap_or(1.0 / rmax) * opts.time.unwrap_or(rmax * rmax),
     };
     let margin = match opts.method {
-        InpaintMethod::Axial => MARGIN_VOXELS * h,
+        InpaintMethod::Axial | InpaintMethod::Centerline => MARGIN_VOXELS * h,
         _ => 0.5 * rmax + MARGIN_VOXELS * h + growth,
     };
     // Room for the fills that grow the shape (the sub-box is never clamped by the lattice).
@@ -291,7 +317,7 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     // closest-point transform: the sweeps' measure with the nearest crossing found exactly, at
     // a fixed cost (about 2.5× faster on the ~76³ core). The flows evolve the whole sub-box.
     match opts.method {
-        InpaintMethod::Axial => {
+        InpaintMethod::Axial | InpaintMethod::Centerline => {
             let core = nodes_around(&sub_origin, h, dims, balls, AXIAL_CORE_VOXELS * h);
             let mut inner = phi0.extract(&core)?;
             redistance(
@@ -333,72 +359,68 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     let weights = blend_weights(&depth, opts.blend_voxels * h);
     let mut axes = Vec::new();
     let mut junctions = 0;
+    let mut guides = Vec::new();
+    let mut notices = Vec::new();
     let mut iterations = 1;
     let mut converged = true;
     let mut psi = match opts.method {
         InpaintMethod::Axial => {
-            // Per ball: a tube through it (two crossings) takes the chord between them; a
-            // junction (three or more) tries each branch's axis; otherwise (a chopped wall) the
-            // axis of the intact surface around the ball.
-            let crossings = branch_crossings(&cut, balls);
-            let mut candidates = Vec::new();
-            for (k, b) in balls.iter().enumerate() {
-                let mine: Vec<_> = crossings.iter().filter(|c| c.ball == k).collect();
-                let list = match mine.len() {
-                    2 => vec![(mine[1].center - mine[0].center)
-                        .try_normalize(1e-12)
-                        .unwrap_or(mine[0].axis)],
-                    n if n >= 3 => mine.iter().map(|c| c.axis).collect(),
-                    _ => vec![estimate_axis(&closed_input, b, 2.0).ok_or_else(|| {
-                        Error::Geometry(format!(
-                            "no surface around the region at {} (radius {}) to take the vessel axis from",
-                            b.center, b.radius
-                        ))
-                    })?],
-                };
-                axes.push([list[0].x, list[0].y, list[0].z]);
-                candidates.push(list);
-            }
-            let mut g = phi0.clone();
-            fill_axial(&mut g, balls, &candidates)?;
-            // A junction (three or more branches cross one ball): the capsules of the branches
-            // instead, each with the radius it has at its crossing.
-            for (k, _) in balls.iter().enumerate() {
-                let mine: Vec<_> = crossings.iter().filter(|c| c.ball == k).collect();
-                if mine.len() < 3 {
-                    continue;
+            let (g, a, j) =
+                fill_axial_regions(&phi0, &closed_input, &cut, balls, &depth, radius_estimate)?;
+            axes = a;
+            junctions = j;
+            g
+        }
+        InpaintMethod::Centerline => {
+            let computed;
+            let centerline = match centerline {
+                Some(c) => Some(c),
+                None => match compute_centerline(mesh, &CenterlineOptions::default()) {
+                    Ok((c, _)) => {
+                        computed = c;
+                        Some(&computed)
+                    }
+                    Err(e) => {
+                        notices.push(format!(
+                            "no centreline ({e}): every region filled along its axis instead"
+                        ));
+                        None
+                    }
+                },
+            };
+            let bvh = MeshBvh::new(&closed_input);
+            let plans = centerline.map_or_else(Vec::new, |c| {
+                plan_guides(&bvh, c, balls, h, &GuideOptions::default())
+            });
+            let mut guided_ball = vec![false; balls.len()];
+            for g in &plans {
+                for &b in &g.balls {
+                    guided_ball[b] = true;
                 }
-                // Each branch: a cylinder fitted to the intact wall next to its crossing.
-                let branches: Vec<Branch> = mine
-                    .iter()
-                    .map(|c| {
-                        let fit =
-                            fit_cylinder(&closed_input, balls, &c.center, 2.0 * radius_estimate);
-                        match fit {
-                            Some((center, axis, radius)) => Branch {
-                                center,
-                                axis,
-                                radius,
-                            },
-                            None => Branch {
-                                center: c.center,
-                                axis: c.axis,
-                                radius: radius_estimate,
-                            },
-                        }
-                    })
-                    .collect();
-                let only: Vec<bool> = depth
-                    .iter()
-                    .enumerate()
-                    .map(|(n, &d)| {
-                        let [i, j, l] = phi0.coords(n);
-                        d > 0.0 && deepest_ball(balls, &phi0.world(i, j, l)).1 == k
-                    })
-                    .collect();
-                fill_junction(&mut g, &only, &branches)?;
-                junctions += 1;
+                guides.extend(g.kinds.iter().copied());
             }
+            let rest: Vec<Ball> = balls
+                .iter()
+                .zip(&guided_ball)
+                .filter(|(_, &g)| !g)
+                .map(|(b, _)| *b)
+                .collect();
+            let mut g = if rest.is_empty() {
+                phi0.clone()
+            } else {
+                if centerline.is_some() {
+                    notices.push(format!(
+                        "{} region(s) with no vessel passing through them on the centreline: filled along their axis",
+                        rest.len()
+                    ));
+                }
+                let (g, a, j) =
+                    fill_axial_regions(&phi0, &closed_input, &cut, &rest, &depth, radius_estimate)?;
+                axes = a;
+                junctions = j;
+                g
+            };
+            fill_guided(&mut g, balls, &plans);
             g
         }
         InpaintMethod::Msr => fill_msr(&phi0, &unknown, &fill_opts)?.0,
@@ -452,9 +474,9 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         .for_each(|(v, &k)| *v = v.min(k));
     blend_known(&mut psi, &phi0, &weights);
     remove_islands(&mut psi, &unknown);
-    // Marching cubes needs distances near the surface only. The axial fill interpolates
-    // distances, which are already that; the flows' and msr's fields are redistanced first.
-    if opts.method != InpaintMethod::Axial {
+    // Marching cubes needs distances near the surface only. The axial and centreline fills
+    // give distances, which are already that; the flows' and msr's fields are redistanced first.
+    if !matches!(opts.method, InpaintMethod::Axial | InpaintMethod::Centerline) {
         redistance(
             &mut psi,
             &RedistanceOptions {
@@ -502,8 +524,89 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
         converged,
         stitched,
         fallback,
+        guides,
+        notices,
         timings,
     })
+}
+
+/// The axial fill of every ball (see `axial`): per ball, a tube through it (two crossings of
+/// ∂D) takes the chord between them; a junction (three or more) the capsules of its branches;
+/// otherwise (a chopped wall) the axis of the intact surface around the ball. Returns the filled
+/// field, the axis used for each ball and the number of junctions.
+fn fill_axial_regions(
+    phi0: &Grid3,
+    closed_input: &TriMesh,
+    cut: &CutOut,
+    balls: &[Ball],
+    depth: &[f32],
+    radius_estimate: f64,
+) -> Result<(Grid3, Vec<[f64; 3]>, usize)> {
+    // Per ball: a tube through it (two crossings) takes the chord between them; a
+    // junction (three or more) tries each branch's axis; otherwise (a chopped wall) the
+    // axis of the intact surface around the ball.
+    let crossings = branch_crossings(cut, balls);
+    let mut axes = Vec::new();
+    let mut candidates = Vec::new();
+    for (k, b) in balls.iter().enumerate() {
+        let mine: Vec<_> = crossings.iter().filter(|c| c.ball == k).collect();
+        let list = match mine.len() {
+            2 => vec![(mine[1].center - mine[0].center)
+                .try_normalize(1e-12)
+                .unwrap_or(mine[0].axis)],
+            n if n >= 3 => mine.iter().map(|c| c.axis).collect(),
+            _ => vec![estimate_axis(closed_input, b, 2.0).ok_or_else(|| {
+                Error::Geometry(format!(
+                    "no surface around the region at {} (radius {}) to take the vessel axis from",
+                    b.center, b.radius
+                ))
+            })?],
+        };
+        axes.push([list[0].x, list[0].y, list[0].z]);
+        candidates.push(list);
+    }
+    let mut g = phi0.clone();
+    let mut junctions = 0;
+    fill_axial(&mut g, balls, &candidates)?;
+    // A junction (three or more branches cross one ball): the capsules of the branches
+    // instead, each with the radius it has at its crossing.
+    for (k, _) in balls.iter().enumerate() {
+        let mine: Vec<_> = crossings.iter().filter(|c| c.ball == k).collect();
+        if mine.len() < 3 {
+            continue;
+        }
+        // Each branch: a cylinder fitted to the intact wall next to its crossing.
+        let branches: Vec<Branch> = mine
+            .iter()
+            .map(|c| {
+                let fit =
+                    fit_cylinder(closed_input, balls, &c.center, 2.0 * radius_estimate);
+                match fit {
+                    Some((center, axis, radius)) => Branch {
+                        center,
+                        axis,
+                        radius,
+                    },
+                    None => Branch {
+                        center: c.center,
+                        axis: c.axis,
+                        radius: radius_estimate,
+                    },
+                }
+            })
+            .collect();
+        let only: Vec<bool> = depth
+            .iter()
+            .enumerate()
+            .map(|(n, &d)| {
+                let [i, j, l] = phi0.coords(n);
+                d > 0.0 && deepest_ball(balls, &phi0.world(i, j, l)).1 == k
+            })
+            .collect();
+        fill_junction(&mut g, &only, &branches)?;
+        junctions += 1;
+    }
+    Ok((g, axes, junctions))
 }
 
 /// Largest change of φ at the nodes of D next to the zero level set of either field (world units).
