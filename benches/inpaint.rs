@@ -61,7 +61,8 @@
 //!
 //! Run: `cargo bench --bench inpaint` (`-- phantoms` for (a) only, `-- real` for (b), `-- speed`
 //! for (c);
-//! $VESSELMSR_BENCH_FULL=1 adds `flow` and `paper` to (b)) (the baselines and the reference need reference/.venv,
+//! $VESSELMSR_BENCH_FULL=1 adds `flow` and `paper` to (b); $VESSELMSR_BENCH_METHODS=centerline,axial
+//! runs only the listed columns) (the baselines and the reference need reference/.venv,
 //! which `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON; without it only our methods run).
 
 mod common;
@@ -185,6 +186,13 @@ fn labels() -> Vec<String> {
     l
 }
 
+/// Whether `label` is among $VESSELMSR_BENCH_METHODS (a comma-separated list of table labels,
+/// e.g. `centerline,axial`; unset: every one), to time a few methods while developing.
+fn wanted_label(label: &str) -> bool {
+    std::env::var("VESSELMSR_BENCH_METHODS")
+        .map_or(true, |list| list.split(',').any(|m| m.trim() == label))
+}
+
 /// Which of the costly runs to do.
 #[derive(Clone, Copy)]
 struct Which {
@@ -212,7 +220,9 @@ fn run_all(
     let mut scores = Vec::new();
     let mut default_output = None;
     for method in InpaintMethod::ALL {
-        if !with_slow && matches!(method, InpaintMethod::Flow | InpaintMethod::Paper) {
+        if !wanted_label(method.as_str())
+            || (!with_slow && matches!(method, InpaintMethod::Flow | InpaintMethod::Paper))
+        {
             scores.push(None);
             continue;
         }
@@ -251,7 +261,7 @@ fn run_all(
     vesselmsr::io::write_mesh(&input, damaged).expect("write the damaged mesh");
     let baseline = reference.with_script("baseline.py");
     for (name, wanted) in [("close-holes", true), ("poisson", with_poisson)] {
-        if !wanted {
+        if !wanted || !wanted_label(name) {
             scores.push(None);
             continue;
         }

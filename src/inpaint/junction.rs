@@ -34,7 +34,7 @@ pub fn junction_point(branches: &[Branch]) -> Option<Point3<f64>> {
 }
 
 /// Polynomial smooth minimum of width `k` (world units).
-fn smooth_min(a: f64, b: f64, k: f64) -> f64 {
+pub(crate) fn smooth_min(a: f64, b: f64, k: f64) -> f64 {
     let h = (0.5 + 0.5 * (b - a) / k).clamp(0.0, 1.0);
     b + (a - b) * h - k * h * (1.0 - h)
 }
