@@ -62,7 +62,8 @@
 //! Run: `cargo bench --bench inpaint` (`-- phantoms` for (a) only, `-- real` for (b), `-- speed`
 //! for (c);
 //! $VESSELMSR_BENCH_FULL=1 adds `flow` and `paper` to (b); $VESSELMSR_BENCH_METHODS=centerline,axial
-//! runs only the listed columns) (the baselines and the reference need reference/.venv,
+//! runs only the listed columns; $VESSELMSR_BENCH_KEEP=DIR writes each case of (b): damaged and
+//! truth meshes, regions file) (the baselines and the reference need reference/.venv,
 //! which `bash tests/run_all.sh` creates, or $VESSELMSR_PYTHON; without it only our methods run).
 
 mod common;
@@ -679,6 +680,17 @@ fn real(dir: &Path, reference: Option<&Reference>) {
             };
             let case = format!("{}#{}", name.trim_end_matches(".stl"), n + 1);
             let balls = [region];
+            if let Some(dir) = std::env::var_os("VESSELMSR_BENCH_KEEP") {
+                // The case's inputs, to repeat one by hand.
+                let dir = Path::new(&dir);
+                let _ = std::fs::create_dir_all(dir);
+                let _ = vesselmsr::io::write_mesh(&dir.join(format!("{case}.damaged.stl")), &damaged);
+                let _ = vesselmsr::io::write_mesh(&dir.join(format!("{case}.truth.stl")), &truth);
+                let _ = vesselmsr::inpaint::region::write_regions(
+                    &dir.join(format!("{case}.regions.json")),
+                    &balls,
+                );
+            }
             let slow = full;
             let (scores, output) = run_all(
                 &case,

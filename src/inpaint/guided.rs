@@ -36,7 +36,7 @@
 use super::junction::{junction_point, smooth_min, Branch as AxisBranch};
 use super::region::Ball;
 use crate::bvh::MeshBvh;
-use crate::centerline::Centerline;
+use crate::centerline::{Centerline, EndKind};
 use crate::grid::Grid3;
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
@@ -217,14 +217,21 @@ fn plan_group(
             (q - p).norm() >= 1.5 * r + disk
         })
     };
-    let mut through: Vec<(Anchor, Anchor)> = Vec::new();
-    let mut one_sided: Vec<(Anchor, Vec<Point3<f64>>)> = Vec::new();
+    // Every place a branch enters E from outside: an anchor, with the branch's run inside E
+    // (from the entry inward) and the run's other anchor when the branch leaves E again.
+    let mut stubs: Vec<Stub> = Vec::new();
     for br in &centerline.branches {
         let n = br.points.len();
         if n < 2 {
             continue;
         }
         let inside: Vec<bool> = br.points.iter().map(&in_e).collect();
+        let arc = |a: usize, b: usize| -> f64 {
+            br.points[a.min(b)..=a.max(b)]
+                .windows(2)
+                .map(|w| (w[1] - w[0]).norm())
+                .sum()
+        };
         let mut i = 0;
         while i < n {
             if !inside[i] {
@@ -260,69 +267,146 @@ fn plan_group(
                     k = next;
                 }
             };
-            let left = (s > 0).then(|| walk(s - 1, -1));
-            let right = (e + 1 < n).then(|| walk(e + 1, 1));
-            match (left, right) {
-                (Some(a), Some(b)) => through.push((a, b)),
-                (Some(a), None) => one_sided.push((a, br.points[s..=e].to_vec())),
-                (None, Some(b)) => {
-                    one_sided.push((b, br.points[s..=e].iter().rev().copied().collect()))
+            // How far the branch goes on outside E from the run's edge (a junction or an open
+            // end beyond: the vessel goes on).
+            let outside_len = |edge: usize, step: isize| -> f64 {
+                let mut k = edge as isize;
+                while k + step >= 0 && k + step < n as isize && !inside[(k + step) as usize] {
+                    k += step;
                 }
-                (None, None) => {}
+                let tip = k as usize;
+                let goes_on = if tip == 0 { br.start } else { br.end };
+                if (tip == 0 || tip == n - 1) && goes_on != EndKind::End {
+                    f64::INFINITY
+                } else {
+                    arc(edge, tip)
+                }
+            };
+            let first = stubs.len();
+            if s > 0 {
+                stubs.push(Stub {
+                    anchor: walk(s - 1, -1),
+                    outside: outside_len(s - 1, -1),
+                    run: br.points[s..=e].to_vec(),
+                    partner: None,
+                });
             }
+            if e + 1 < n {
+                stubs.push(Stub {
+                    anchor: walk(e + 1, 1),
+                    outside: outside_len(e + 1, 1),
+                    run: br.points[s..=e].iter().rev().copied().collect(),
+                    partner: None,
+                });
+            }
+            if stubs.len() == first + 2 {
+                stubs[first].partner = Some(first + 1);
+                stubs[first + 1].partner = Some(first);
+            }
+        }
+    }
+    // Spurs of the damage (the skeleton of a dented lumen sprouts short, thin branches) are no
+    // vessels: an anchor needs the branch to go on outside E for two of its radii and a radius
+    // of at least a third of the widest anchor's. The same vessel reached twice (a run that
+    // leaves E right where another enters) counts once.
+    let widest = stubs.iter().map(|s| s.anchor.radius).fold(0.0, f64::max);
+    let mut keep: Vec<bool> = stubs
+        .iter()
+        .map(|s| s.outside >= 2.0 * s.anchor.radius && s.anchor.radius >= widest / 3.0)
+        .collect();
+    // Two anchors closer than half a radius read the same section (two branches leaving one
+    // junction node, when no section between the junction and D is clear of D): the one that
+    // points more towards D stays.
+    let towards_d = |a: &Anchor| {
+        balls
+            .iter()
+            .map(|b| (b.center - a.point).try_normalize(1e-12).map_or(0.0, |d| d.dot(&a.into)))
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    for a in 0..stubs.len() {
+        for b in a + 1..stubs.len() {
+            let (p, q) = (&stubs[a].anchor, &stubs[b].anchor);
+            if keep[a] && keep[b] && (p.point - q.point).norm() < 0.5 * p.radius.max(q.radius) {
+                if towards_d(q) > towards_d(p) {
+                    keep[a] = false;
+                } else {
+                    keep[b] = false;
+                }
+            }
+        }
+    }
+    let kept: Vec<usize> = (0..stubs.len()).filter(|&i| keep[i]).collect();
+    if std::env::var_os("VMSR_DEBUG").is_some() {
+        for (i, st) in stubs.iter().enumerate() {
+            eprintln!(
+                "stub {i} keep {} at {:?} into {:?} r {:.3} outside {:.2} partner {:?}",
+                keep[i], st.anchor.point, st.anchor.into, st.anchor.radius, st.outside, st.partner
+            );
         }
     }
     let mut tubes = Vec::new();
     let mut kinds = Vec::new();
     let spacing = h / opts.samples_per_voxel.max(0.5);
-    for (a, b) in &through {
+    let bridge = |a: &Anchor, b: &Anchor| {
         let pts = hermite(a, b, spacing);
-        tubes.push(make_tube(bvh, pts, a, Some(b), EndCap::Open, EndCap::Open, opts));
-        kinds.push(GuideKind::Through);
+        make_tube(bvh, pts, a, Some(b), EndCap::Open, EndCap::Open, opts)
+    };
+    // A run through E joins its two anchors (a vessel crossing D, or clipped by it); the
+    // anchors left over are the vessel's ends inside D, joined below.
+    let mut single: Vec<usize> = Vec::new();
+    for &i in &kept {
+        match stubs[i].partner.filter(|&p| keep[p]) {
+            Some(p) if i < p => {
+                tubes.push(bridge(&stubs[i].anchor, &stubs[p].anchor));
+                kinds.push(GuideKind::Through);
+            }
+            Some(_) => {}
+            None => single.push(i),
+        }
     }
-    match one_sided.len() {
+    match single.len() {
         0 => {}
         1 => {
             // A dead end: continued along its own (damaged) centreline, capped.
-            let (a, run) = &one_sided[0];
-            let mut pts = vec![a.point];
-            pts.extend(run.iter().copied());
+            let st = &stubs[single[0]];
+            let mut pts = vec![st.anchor.point];
+            pts.extend(st.run.iter().copied());
             let pts = resample(&pts, spacing);
-            tubes.push(make_tube(bvh, pts, a, None, EndCap::Open, EndCap::Round, opts));
+            tubes.push(make_tube(bvh, pts, &st.anchor, None, EndCap::Open, EndCap::Round, opts));
             kinds.push(GuideKind::DeadEnd);
         }
         2 => {
-            let (a, _) = &one_sided[0];
-            let (b, _) = &one_sided[1];
-            let pts = hermite(a, b, spacing);
-            tubes.push(make_tube(bvh, pts, a, Some(b), EndCap::Open, EndCap::Open, opts));
+            tubes.push(bridge(&stubs[single[0]].anchor, &stubs[single[1]].anchor));
             kinds.push(GuideKind::Bridge);
         }
         _ => {
-            // A junction: the centreline's own junction inside E, else least squares.
-            let j = centerline
-                .junctions
+            // A junction: where the anchors' axes meet (least squares) when that is in E, else
+            // the centreline's junction in E nearest to the anchors, else their centroid.
+            let anchors: Vec<Anchor> = single.iter().map(|&i| stubs[i].anchor).collect();
+            let sum = anchors
                 .iter()
-                .map(|j| j.position)
-                .find(|p| in_e(p))
-                .or_else(|| {
-                    let axes: Vec<AxisBranch> = one_sided
-                        .iter()
-                        .map(|(a, _)| AxisBranch {
-                            center: a.point,
-                            axis: a.into,
-                            radius: a.radius,
-                        })
-                        .collect();
-                    junction_point(&axes).filter(|p| in_e(p))
+                .fold(Vector3::zeros(), |s, a| s + a.point.coords);
+            let centroid = Point3::from(sum / anchors.len() as f64);
+            let axes: Vec<AxisBranch> = anchors
+                .iter()
+                .map(|a| AxisBranch {
+                    center: a.point,
+                    axis: a.into,
+                    radius: a.radius,
                 })
-                .unwrap_or_else(|| {
-                    let sum = one_sided
+                .collect();
+            let j = junction_point(&axes)
+                .filter(|p| in_e(p))
+                .or_else(|| {
+                    centerline
+                        .junctions
                         .iter()
-                        .fold(Vector3::zeros(), |s, (a, _)| s + a.point.coords);
-                    Point3::from(sum / one_sided.len() as f64)
-                });
-            for (a, _) in &one_sided {
+                        .map(|j| j.position)
+                        .filter(|p| in_e(p))
+                        .min_by(|a, b| (a - centroid).norm().total_cmp(&(b - centroid).norm()))
+                })
+                .unwrap_or(centroid);
+            for a in &anchors {
                 let toward = Anchor {
                     point: j,
                     into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
@@ -335,6 +419,16 @@ fn plan_group(
         }
     }
     (!tubes.is_empty()).then_some((tubes, kinds))
+}
+
+/// Where a branch enters E: its anchor, how far the branch goes on outside E beyond the edge of
+/// the run (∞ when it reaches a junction or an open end), its points inside E from the entry
+/// inward, and the stub at the run's other end when the branch leaves E again.
+struct Stub {
+    anchor: Anchor,
+    outside: f64,
+    run: Vec<Point3<f64>>,
+    partner: Option<usize>,
 }
 
 /// Samples of the cubic Hermite curve from `a` (leaving along a.into) to `b` (arriving against
