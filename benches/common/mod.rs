@@ -3,6 +3,8 @@
 //! and writes. A benchmark uses it with `mod common;`; the figures each prints stay in the bench.
 #![allow(dead_code)]
 
+pub mod surface;
+
 use nalgebra::Point3;
 use serde_json::Value;
 use std::ffi::OsStr;
@@ -65,6 +67,11 @@ impl Reference {
             python,
             script: root().join("reference/oracle.py"),
         })
+    }
+
+    /// The Python that runs the oracle (e.g. for `python -m pip` or another script).
+    pub fn python(&self) -> &Path {
+        &self.python
     }
 
     /// The same Python running another script of `reference/` (e.g. `msr.py`).
