@@ -67,7 +67,7 @@
 mod common;
 
 use common::surface::{hausdorff_in, in_region, median, sig, volume_in, AreaSampler};
-use common::{load, Reference};
+use common::{load, Reference, REAL_VESSELS};
 use nalgebra::Point3;
 use std::collections::HashSet;
 use std::ffi::OsString;
@@ -86,14 +86,6 @@ use vesselmsr::mesh::topology::{boundary_loops, connected_components, EdgeMap};
 use vesselmsr::report::stenosis::volume_in_ball;
 use vesselmsr::TriMesh;
 
-/// Real vessel meshes of (b) (file names in ../shared/data/real).
-const REAL: [&str; 5] = [
-    "aorta_abdominal_capped.stl",
-    "aorta_abdominal_open_ends.stl",
-    "carotid_bifurcation.stl",
-    "ica_aneurysm_c0015.stl",
-    "coronary_stenosis_xray.stl",
-];
 /// Coarsest voxel of (b), as a fraction of the smallest local radius: the default voxel or
 /// R/8 (the phantoms' resolution), whichever is larger (at the default voxel alone the aorta's
 /// `msr` took 70 s a case).
@@ -513,7 +505,7 @@ fn real(dir: &Path, reference: Option<&Reference>) {
     let mut per_method: Vec<Vec<Score>> = vec![Vec::new(); labels().len()];
     let mut checks = Checks::default();
     let full = std::env::var_os("VESSELMSR_BENCH_FULL").is_some();
-    for name in REAL {
+    for name in REAL_VESSELS {
         let path = dir.join(name);
         let mesh = match vesselmsr::io::read_mesh(&path) {
             Ok(m) => m,

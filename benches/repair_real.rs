@@ -53,7 +53,7 @@
 mod common;
 
 use common::surface::{hausdorff_in, median_all, sig, volume_in, AreaSampler};
-use common::{load, Reference};
+use common::{load, Reference, REAL_VESSELS};
 use nalgebra::{Point3, Vector3};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -70,14 +70,6 @@ use vesselmsr::mesh::measures::{bounding_box, mean_edge_length};
 use vesselmsr::mesh::topology::{boundary_loops, connected_components};
 use vesselmsr::TriMesh;
 
-/// The real vessels (file names in ../shared/data/real): every one but the cortex.
-const VESSELS: [&str; 5] = [
-    "aorta_abdominal_capped.stl",
-    "aorta_abdominal_open_ends.stl",
-    "carotid_bifurcation.stl",
-    "ica_aneurysm_c0015.stl",
-    "coronary_stenosis_xray.stl",
-];
 /// Seed of every draw (one splitmix64 stream per kind of damage and vessel).
 const SEED: u64 = 21;
 /// Wall chops per vessel.
@@ -1157,7 +1149,7 @@ fn main() {
     let root = keep.clone().unwrap_or_else(|| tmp.path().to_path_buf());
     let tools = tool_names(paper);
     let mut all = Vec::new();
-    for (index, file) in VESSELS.iter().enumerate() {
+    for (index, file) in REAL_VESSELS.iter().enumerate() {
         if !only.is_empty() && !only.iter().any(|o| file.contains(o.as_str())) {
             continue;
         }

@@ -12,6 +12,16 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+/// The real vessels of ../shared/data/real that the benches damage and repair: every mesh there
+/// but the cortex.
+pub const REAL_VESSELS: [&str; 5] = [
+    "aorta_abdominal_capped.stl",
+    "aorta_abdominal_open_ends.stl",
+    "carotid_bifurcation.stl",
+    "ica_aneurysm_c0015.stl",
+    "coronary_stenosis_xray.stl",
+];
+
 /// The project root (where reference/ and data/ are).
 pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
