@@ -12,8 +12,9 @@
 //!   the mesh without every triangle that has a vertex inside the ball of 1.5R on the point (an
 //!   open hole), its largest connected component kept; D = the ball of 1.5R·1.3.
 //! - a 50% stenosis: a centreline point (seeded) more than 4R from the junctions and the
-//!   endpoints, 3σ of branch on both sides, the inscribed radius within 0.75–1.33 R over them
-//!   (a healthy stretch; R its inscribed radius, σ = 1.2R); every vertex whose closest
+//!   endpoints (3R, then 2R, where no point is 4R away, with a note), 3σ of branch on both
+//!   sides, the inscribed radius within 0.75–1.33 R over them (a healthy stretch; R its
+//!   inscribed radius, σ = 1.2R); every vertex whose closest
 //!   centreline branch is this one, within 2.5R of it and 4σ along it, moved towards its
 //!   projection c(s) on the branch polyline: v ← c + (v − c)·(1 − 0.5·exp(−(s − s₀)²/(2σ²))),
 //!   s the arc length. D = the ball of 3σ on the point.
@@ -256,7 +257,7 @@ struct CaseResult {
     input: Outcome,
     /// Per tool of `tool_names`; None: not run.
     outcomes: Vec<Option<Outcome>>,
-    /// MeshLib's whole script (all three peers, Python start-up and imports included).
+    /// peers.py's wall time (all three peers, Python start-up and imports included).
     peers_script: Option<f64>,
     /// Our report's NASCET and diameter stenosis for the damaged input (stenosis case).
     stenosis: Option<(Option<f64>, Option<f64>)>,
