@@ -68,7 +68,8 @@
 
 mod common;
 
-use common::{load, Reference};
+use common::surface::{hausdorff_in, in_region, median, sig, volume_in, AreaSampler};
+use common::{load, Reference, REAL_VESSELS};
 use nalgebra::Point3;
 use std::collections::HashSet;
 use std::ffi::OsString;
@@ -87,14 +88,6 @@ use vesselmsr::mesh::topology::{boundary_loops, connected_components, EdgeMap};
 use vesselmsr::report::stenosis::volume_in_ball;
 use vesselmsr::TriMesh;
 
-/// Real vessel meshes of (b) (file names in ../shared/data/real).
-const REAL: [&str; 5] = [
-    "aorta_abdominal_capped.stl",
-    "aorta_abdominal_open_ends.stl",
-    "carotid_bifurcation.stl",
-    "ica_aneurysm_c0015.stl",
-    "coronary_stenosis_xray.stl",
-];
 /// Coarsest voxel of (b), as a fraction of the smallest local radius: the default voxel or
 /// R/8 (the phantoms' resolution), whichever is larger (at the default voxel alone the aorta's
 /// `msr` took 70 s a case).
@@ -107,20 +100,6 @@ const POISSON_DEPTH: usize = 7;
 /// Chop ball radius and region radius, in local vessel radii.
 const CHOP: f64 = 1.5;
 const REGION: f64 = 1.5 * 1.3;
-/// Barycentric sample points per triangle (vertices, edge midpoints, centroid, three more).
-const BARY: [[f64; 3]; 10] = [
-    [1.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0],
-    [0.0, 0.0, 1.0],
-    [0.5, 0.5, 0.0],
-    [0.0, 0.5, 0.5],
-    [0.5, 0.0, 0.5],
-    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
-    [2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0],
-    [1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0],
-    [1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0],
-];
-
 /// One output measured against the truth.
 #[derive(Clone)]
 struct Score {
@@ -134,39 +113,10 @@ struct Score {
     stitched: Option<bool>,
 }
 
-fn in_region(balls: &[Ball], p: &Point3<f64>) -> bool {
-    balls.iter().any(|b| (p - b.center).norm() < b.radius)
-}
-
-/// Largest distance from the samples of `a` inside D to the surface `b` (0 when `a` has none).
-fn directed_hausdorff(a: &TriMesh, b: &MeshBvh, balls: &[Ball]) -> Option<f64> {
-    let mut worst: Option<f64> = None;
-    for f in 0..a.num_faces() {
-        let [p, q, r] = a.triangle(f);
-        for w in BARY {
-            let s = Point3::from(p.coords * w[0] + q.coords * w[1] + r.coords * w[2]);
-            if in_region(balls, &s) {
-                let d = b.closest_point(&s).distance;
-                worst = Some(worst.map_or(d, |x: f64| x.max(d)));
-            }
-        }
-    }
-    worst
-}
-
 fn score(output: &TriMesh, truth: &TriMesh, balls: &[Ball], h: f64, seconds: f64) -> Score {
-    let hd = if output.num_faces() == 0 {
-        None
-    } else {
-        let to_truth = directed_hausdorff(output, &MeshBvh::new(truth), balls);
-        let to_output = directed_hausdorff(truth, &MeshBvh::new(output), balls);
-        match (to_truth, to_output) {
-            (Some(a), Some(b)) => Some(a.max(b)),
-            (a, b) => a.or(b),
-        }
-    };
-    let v_truth: f64 = balls.iter().map(|b| volume_in_ball(truth, b)).sum();
-    let v_out: f64 = balls.iter().map(|b| volume_in_ball(output, b)).sum();
+    let hd = hausdorff_in(output, truth, balls);
+    let v_truth = volume_in(truth, balls);
+    let v_out = volume_in(output, balls);
     Score {
         hausdorff_h: hd.map_or(f64::NAN, |d| d / h),
         volume_pct: 100.0 * (v_out - v_truth) / v_truth,
@@ -331,30 +281,6 @@ fn print_row(case: &str, scores: &[Option<Score>]) {
         "{case:<30} | {} | best: {w}",
         scores.iter().map(cell).collect::<Vec<_>>().join(" | ")
     );
-}
-
-/// `x` with 4 significant digits (the meshes' units range from metres to millimetres).
-fn sig(x: f64) -> String {
-    let digits = if x == 0.0 || !x.is_finite() {
-        0
-    } else {
-        (3 - x.abs().log10().floor() as i64).max(0) as usize
-    };
-    format!("{x:.digits$}")
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
 }
 
 /// What the acceptance asks of every output of the default method: manifold3d's verdict, outward,
@@ -528,10 +454,7 @@ fn draw_wall_points(
     long_ends: bool,
 ) -> Vec<(Point3<f64>, f64)> {
     let bvh = MeshBvh::new(mesh);
-    let areas: Vec<f64> = (0..mesh.num_faces())
-        .map(|f| 0.5 * mesh.face_normal_raw(f).norm())
-        .collect();
-    let total: f64 = areas.iter().sum();
+    let sampler = AreaSampler::new(mesh);
     let (lo, hi) = bounding_box(mesh);
     let long = (0..3)
         .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
@@ -544,18 +467,7 @@ fn draw_wall_points(
         if found.len() == POINTS {
             break;
         }
-        let mut t = rng.uniform() * total;
-        let mut f = 0;
-        while f + 1 < areas.len() && t > areas[f] {
-            t -= areas[f];
-            f += 1;
-        }
-        let (mut u, mut v) = (rng.uniform(), rng.uniform());
-        if u + v > 1.0 {
-            (u, v) = (1.0 - u, 1.0 - v);
-        }
-        let [a, b, c] = mesh.triangle(f);
-        let p = Point3::from(a.coords * (1.0 - u - v) + b.coords * u + c.coords * v);
+        let p = sampler.draw(mesh, &mut rng);
         let Some(r) = local_vessel_radius(mesh, &bvh, &p) else {
             continue;
         };
@@ -604,7 +516,7 @@ fn real(dir: &Path, reference: Option<&Reference>) {
     let mut per_method: Vec<Vec<Score>> = vec![Vec::new(); labels().len()];
     let mut checks = Checks::default();
     let full = std::env::var_os("VESSELMSR_BENCH_FULL").is_some();
-    for name in REAL {
+    for name in REAL_VESSELS {
         let path = dir.join(name);
         let mesh = match vesselmsr::io::read_mesh(&path) {
             Ok(m) => m,

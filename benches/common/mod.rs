@@ -3,12 +3,24 @@
 //! and writes. A benchmark uses it with `mod common;`; the figures each prints stay in the bench.
 #![allow(dead_code)]
 
+pub mod surface;
+
 use nalgebra::Point3;
 use serde_json::Value;
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
+
+/// The real vessels of ../shared/data/real that the benches damage and repair: every mesh there
+/// but the cortex.
+pub const REAL_VESSELS: [&str; 5] = [
+    "aorta_abdominal_capped.stl",
+    "aorta_abdominal_open_ends.stl",
+    "carotid_bifurcation.stl",
+    "ica_aneurysm_c0015.stl",
+    "coronary_stenosis_xray.stl",
+];
 
 /// The project root (where reference/ and data/ are).
 pub fn root() -> &'static Path {
@@ -65,6 +77,11 @@ impl Reference {
             python,
             script: root().join("reference/oracle.py"),
         })
+    }
+
+    /// The Python that runs the oracle (e.g. for `python -m pip` or another script).
+    pub fn python(&self) -> &Path {
+        &self.python
     }
 
     /// The same Python running another script of `reference/` (e.g. `msr.py`).
