@@ -43,7 +43,7 @@ pub enum Command {
     /// Validate a mesh and print its measures (counts, boundary loops, watertightness, orientation,
     /// volume, area, bounding box, mean edge length, genus).
     Info {
-        /// Input mesh (.stl, .obj or .ply).
+        /// Input mesh (.stl, .obj, .ply, .vtp or .vtk).
         mesh: PathBuf,
     },
     /// Close every boundary loop (open vessel ends, holes) with refined planar caps and write a

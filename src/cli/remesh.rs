@@ -17,9 +17,9 @@ use std::time::Instant;
 
 #[derive(Debug, clap::Args)]
 pub struct RemeshArgs {
-    /// Input mesh (.stl, .obj or .ply).
+    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk).
     pub mesh: PathBuf,
-    /// Output mesh (.stl, .obj or .ply).
+    /// Output mesh (.stl, .obj, .ply, .vtp or .vtk).
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     #[command(flatten)]
@@ -41,7 +41,7 @@ struct Timings {
 }
 
 #[derive(serde::Serialize)]
-struct RemeshOutput {
+pub(super) struct RemeshOutput {
     grid: GridJson,
     output: MeshInfo,
     /// Enclosed cavities of the extraction reopened to the outside (folds narrower than h).
@@ -52,6 +52,23 @@ struct RemeshOutput {
 }
 
 pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
+    let out = remesh_file(ctx, args)?;
+    if ctx.json {
+        return print_json(&out);
+    }
+    let [nx, ny, nz] = out.grid.dims;
+    println!(
+        "{}: {nx}×{ny}×{nz} grid, voxel {} (file units)",
+        args.output.display(),
+        out.grid.voxel
+    );
+    println!("{}", out.output);
+    Ok(())
+}
+
+/// The whole `remesh` command but the printing: reads, re-meshes, writes the output and returns
+/// what `--json` prints (also for `batch`).
+pub(super) fn remesh_file(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<RemeshOutput> {
     MeshFormat::from_path(&args.output)?;
     // Marching cubes reads φ only next to its zero level set: the narrow band is enough.
     let Voxelized {
@@ -119,15 +136,5 @@ pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
             write,
         },
     };
-    if ctx.json {
-        return print_json(&out);
-    }
-    let [nx, ny, nz] = spec.dims;
-    println!(
-        "{}: {nx}×{ny}×{nz} grid, voxel {} (file units)",
-        args.output.display(),
-        spec.transform.voxel
-    );
-    println!("{}", out.output);
-    Ok(())
+    Ok(out)
 }
