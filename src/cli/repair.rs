@@ -256,11 +256,15 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
                 sources.push("hole".into());
             }
         } else {
-            notices.push(format!(
-                "no holes found ({} boundary loop(s), all open vessel ends): nothing to inpaint{}",
-                infos.len(),
-                if args.open_ends { "" } else { "; the ends are capped" }
-            ));
+            notices.push(if infos.is_empty() {
+                "no holes found (the mesh is closed): nothing to inpaint".to_string()
+            } else {
+                format!(
+                    "no holes found ({} boundary loop(s), all open vessel ends): nothing to inpaint{}",
+                    infos.len(),
+                    if args.open_ends { "" } else { "; the ends are capped" }
+                )
+            });
         }
         loops = infos
             .iter()

@@ -6,6 +6,8 @@
 //! (arterioles) and 50 mm (a large aortic aneurysm) once the unit is known.
 
 use super::measures::{area, area_centroid, signed_volume_about};
+use super::topology::boundary_loops;
+use nalgebra::{Point3, Vector3};
 use crate::TriMesh;
 
 /// Millimetres in one `unit` (`mm`, `cm`, `m`, `um`/`µm`, `in` and their spelt-out names, any
@@ -41,11 +43,27 @@ impl Default for VesselScaleOptions {
     }
 }
 
-/// The typical vessel radius 2·volume/area of `mesh`, in its own units (the volume about the
-/// area centroid, so an open mesh gets a fair estimate too); None for a mesh without area.
+/// The typical vessel radius 2·volume/area of `mesh`, in its own units: the volume enclosed once
+/// every boundary loop (an open vessel end) is closed by a fan from its centroid, over the area
+/// of the mesh's own triangles (so an open tube of radius r gives r); None for a mesh without
+/// area.
 pub fn typical_vessel_radius(mesh: &TriMesh) -> Option<f64> {
     let a = area(mesh);
-    let v = signed_volume_about(mesh, &area_centroid(mesh)).abs();
+    let mut closed = mesh.clone();
+    for lp in boundary_loops(mesh) {
+        let c = lp
+            .iter()
+            .map(|&v| mesh.vertices[v as usize].coords)
+            .sum::<Vector3<f64>>()
+            / lp.len().max(1) as f64;
+        let ci = closed.vertices.len() as u32;
+        closed.vertices.push(Point3::from(c));
+        // The loop reversed: a cap wound like the mesh.
+        for (k, &v) in lp.iter().enumerate() {
+            closed.faces.push([ci, lp[(k + 1) % lp.len()], v]);
+        }
+    }
+    let v = signed_volume_about(&closed, &area_centroid(mesh)).abs();
     (a > 0.0 && v.is_finite()).then(|| 2.0 * v / a)
 }
 
