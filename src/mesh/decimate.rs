@@ -20,8 +20,9 @@ use meshopt::{simplify_decoder, SimplifyOptions};
 pub struct DecimateOptions {
     /// Largest Hausdorff distance allowed between the result and the input, world units.
     pub max_distance: f64,
-    /// The simplifier's first error limit, as a fraction of `max_distance` (its estimate runs
-    /// below the true distance, so it starts under the bound).
+    /// The simplifier's first error limit, as a fraction of `max_distance` (its quadric estimate
+    /// runs well below the true distance: on the shared vessels limits of 0.1h to 0.2h give
+    /// 0.3h to 0.45h, so it starts under the bound).
     pub first_limit_fraction: f64,
     /// Tries, the limit halved after each failed check.
     pub tries: usize,
@@ -33,7 +34,7 @@ impl Default for DecimateOptions {
     fn default() -> Self {
         DecimateOptions {
             max_distance: 0.0,
-            first_limit_fraction: 0.8,
+            first_limit_fraction: 0.4,
             tries: 4,
             samples: 200_000,
         }
