@@ -409,8 +409,9 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
         })?;
     }
     if let Some(path) = args.picture.as_ref().filter(|_| !balls.is_empty()) {
+        // The input as it was, its holes open.
         render_repair(
-            &result.closed_input,
+            &mesh,
             &result.mesh,
             &balls,
             path,
