@@ -41,18 +41,8 @@ fn batch_repairs_a_folder_and_resumes() {
     let dir = tempfile::tempdir().unwrap();
     let (input, out) = (dir.path().join("in"), dir.path().join("out"));
     std::fs::create_dir(&input).unwrap();
-    let run = vesselmsr(&[
-        "phantom",
-        "tube",
-        "-o",
-        s(&input.join("phantom.stl")),
-        "--truth",
-        s(&dir.path().join("truth.stl")),
-        "--regions-out",
-        s(&dir.path().join("r.json")),
-        "-q",
-    ]);
-    assert!(run.status.success());
+    let (tube_phantom, _, _) = common::phantom("tube", dir.path());
+    std::fs::rename(tube_phantom, input.join("phantom.stl")).unwrap();
     let tube = open_tube(2.0, 20.0, 32, 41);
     write_mesh(&input.join("tube.ply"), &tube).unwrap();
     write_mesh(
@@ -136,18 +126,9 @@ fn batch_repairs_a_folder_and_resumes() {
 fn batch_manifest_runs_stenosis_and_remesh() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let run = vesselmsr(&[
-        "phantom",
-        "stenosis",
-        "-o",
-        s(&d.join("sten.stl")),
-        "--truth",
-        s(&d.join("truth.stl")),
-        "--regions-out",
-        s(&d.join("r.json")),
-        "-q",
-    ]);
-    assert!(run.status.success());
+    let (sten, truth, _) = common::phantom("stenosis", d);
+    std::fs::rename(sten, d.join("sten.stl")).unwrap();
+    std::fs::rename(truth, d.join("truth.stl")).unwrap();
     std::fs::write(
         d.join("cohort.csv"),
         "# a comment\nid,mesh,age\nnarrow,sten.stl,61\n\"healthy, truth\",truth.stl,58\n",

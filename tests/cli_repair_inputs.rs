@@ -123,19 +123,7 @@ fn markups_are_read_in_the_mesh_frame() {
 fn markups_drive_a_repair() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (damaged, truth, regions) = (d.join("s.stl"), d.join("t.stl"), d.join("r.json"));
-    let out = vesselmsr(&[
-        "phantom",
-        "stenosis",
-        "-o",
-        s(&damaged),
-        "--truth",
-        s(&truth),
-        "--regions-out",
-        s(&regions),
-        "-q",
-    ]);
-    assert!(out.status.success());
+    let (damaged, _, _) = common::phantom("stenosis", d);
     // A point picked in the narrowing (mesh frame), as a regions file, a RAS .mrk.json and an
     // LPS .fcsv: the same region, the same repair.
     let picked = [0.0, 1.6, 0.0];

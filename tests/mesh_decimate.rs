@@ -84,19 +84,8 @@ fn remesh_decimate_on_the_shipped_aorta() {
 fn repair_decimate_stays_watertight() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (damaged, regions, out) = (d.join("s.stl"), d.join("r.json"), d.join("o.stl"));
-    let run = vesselmsr(&[
-        "phantom",
-        "occlusion",
-        "-o",
-        s(&damaged),
-        "--truth",
-        s(&d.join("t.stl")),
-        "--regions-out",
-        s(&regions),
-        "-q",
-    ]);
-    assert!(run.status.success());
+    let (damaged, _, regions) = common::phantom("occlusion", d);
+    let out = d.join("o.stl");
     let r = vesselmsr_json(&[
         "repair",
         s(&damaged),
