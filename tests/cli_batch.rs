@@ -135,12 +135,18 @@ fn batch_manifest_runs_stenosis_and_remesh() {
     )
     .unwrap();
     let out = d.join("stenosis");
-    let (code, _, rows) = batch(&[s(&d.join("cohort.csv")), "--command", "stenosis", "-q"], &out);
+    let (code, _, rows) = batch(
+        &[s(&d.join("cohort.csv")), "--command", "stenosis", "-q"],
+        &out,
+    );
     assert_eq!(code, Some(0));
     assert_eq!(rows.len(), 2);
     let single = common::vesselmsr_json(&["stenosis", s(&d.join("sten.stl")), "--json", "-q"]);
     let narrow = row(&rows, "narrow");
-    assert_eq!(narrow["stenoses"], single["lesions"].as_array().unwrap().len());
+    assert_eq!(
+        narrow["stenoses"],
+        single["lesions"].as_array().unwrap().len()
+    );
     assert_eq!(
         narrow["max_stenosis_pct"],
         single["lesions"][0]["diameter_stenosis_pct"]
@@ -182,6 +188,9 @@ fn batch_manifest_runs_stenosis_and_remesh() {
     let run = vesselmsr(&["batch", s(&d.join("bad.csv")), "-o", s(&d.join("bad"))]);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(2));
-    assert!(stderr.contains("bad.csv") && stderr.contains("`mesh` column"), "{stderr}");
+    assert!(
+        stderr.contains("bad.csv") && stderr.contains("`mesh` column"),
+        "{stderr}"
+    );
     assert!(!d.join("bad").exists());
 }

@@ -61,7 +61,14 @@ fn fcsv(frame: &str, points: &[[f64; 3]]) -> String {
          # columns = id,x,y,z,ow,ox,oy,oz,vis,sel,lock,label,desc,associatedNodeID\n"
     );
     for (k, p) in points.iter().enumerate() {
-        text += &format!("{},{},{},{},0,0,0,1,1,1,0,F-{},,\n", k + 1, p[0], p[1], p[2], k + 1);
+        text += &format!(
+            "{},{},{},{},0,0,0,1,1,1,0,F-{},,\n",
+            k + 1,
+            p[0],
+            p[1],
+            p[2],
+            k + 1
+        );
     }
     text
 }
@@ -104,8 +111,16 @@ fn markups_are_read_in_the_mesh_frame() {
     // Bad files: an error naming the file and the problem.
     for (name, text, word) in [
         ("frame.mrk.json", mrk_json("IJK", &lps), "coordinateSystem"),
-        ("empty.mrk.json", mrk_json("LPS", &[]), "no placed control point"),
-        ("nan.mrk.json", mrk_json("LPS", &lps).replace("1.5", "\"x\""), "position"),
+        (
+            "empty.mrk.json",
+            mrk_json("LPS", &[]),
+            "no placed control point",
+        ),
+        (
+            "nan.mrk.json",
+            mrk_json("LPS", &lps).replace("1.5", "\"x\""),
+            "position",
+        ),
         ("list.mrk.json", "{\"markups\": 3}".into(), "markups"),
         ("frame.fcsv", fcsv("IJK", &lps), "CoordinateSystem"),
         ("short.fcsv", fcsv("LPS", &lps) + "9,1,2\n", "line 6"),
@@ -137,7 +152,10 @@ fn markups_drive_a_repair() {
         let path = d.join(name);
         std::fs::write(&path, text).unwrap();
         let out = d.join("out.stl");
-        let (r, _) = repair(d, &[s(&damaged), "--regions", s(&path), "-o", s(&out), "-q"]);
+        let (r, _) = repair(
+            d,
+            &[s(&damaged), "--regions", s(&path), "-o", s(&out), "-q"],
+        );
         let g = &r["regions"][0];
         println!(
             "{name}: centre {} radius {} inpainted {} stenosis {}%",
@@ -207,10 +225,7 @@ fn implausible_size_for_the_units_gives_a_notice() {
     write_mesh(&in_mm, &mm).unwrap();
     let out = d.join("out.stl");
     let args = |mesh: &Path, units: &str| -> (Value, String) {
-        repair(
-            d,
-            &[s(mesh), "--holes", "-o", s(&out), "--units", units],
-        )
+        repair(d, &[s(mesh), "--holes", "-o", s(&out), "--units", units])
     };
     let (r, stderr) = args(&in_m, "mm");
     println!("{stderr}");
@@ -250,7 +265,10 @@ fn holes_on_a_mesh_with_only_open_ends() {
         &[s(&tube), "--holes", "-o", s(&out), "--picture", s(&picture)],
     );
     println!("{stderr}");
-    assert!(stderr.contains("no holes found (2 boundary loop(s)"), "{stderr}");
+    assert!(
+        stderr.contains("no holes found (2 boundary loop(s)"),
+        "{stderr}"
+    );
     assert!(r["notices"].to_string().contains("no holes found"));
     assert_eq!(r["regions"].as_array().unwrap().len(), 0);
     assert_eq!(r["watertight"], true);
@@ -259,15 +277,23 @@ fn holes_on_a_mesh_with_only_open_ends() {
     assert_eq!(serde_json::to_value(info.orientation).unwrap(), "outward");
     // Capped: a tube of radius 2 and length 20 holds 80π.
     let v = r["output"]["volume"].as_f64().unwrap();
-    assert!((v / (80.0 * std::f64::consts::PI) - 1.0).abs() < 0.01, "{v}");
+    assert!(
+        (v / (80.0 * std::f64::consts::PI) - 1.0).abs() < 0.01,
+        "{v}"
+    );
     assert!(!picture.exists(), "no picture of nothing");
     // --open-ends keeps them open; a closed mesh has nothing to do either.
-    let (_, _) = repair(d, &[s(&tube), "--holes", "--open-ends", "-o", s(&out), "-q"]);
+    let (_, _) = repair(
+        d,
+        &[s(&tube), "--holes", "--open-ends", "-o", s(&out), "-q"],
+    );
     assert_eq!(mesh_info(&read_mesh(&out).unwrap()).boundary_loops, 2);
     let closed = d.join("closed.stl");
     let (r, _) = repair(d, &[s(&tube), "--holes", "-o", s(&closed), "-q"]);
     assert_eq!(r["output"]["volume"], r["input"]["volume"]);
     let (r, _) = repair(d, &[s(&closed), "--holes", "-o", s(&out), "-q"]);
-    assert!(r["notices"].to_string().contains("no holes found (the mesh is closed)"));
+    assert!(r["notices"]
+        .to_string()
+        .contains("no holes found (the mesh is closed)"));
     assert_eq!(r["output"]["volume"], r["input"]["volume"]);
 }

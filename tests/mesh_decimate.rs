@@ -24,7 +24,9 @@ fn s(p: &Path) -> &str {
 fn remesh_both(dir: &Path, input: &Path) -> (Value, std::path::PathBuf, std::path::PathBuf) {
     let (lean, full) = (dir.join("lean.stl"), dir.join("full.stl"));
     let r = vesselmsr_json(&["remesh", s(input), "-o", s(&lean), "--decimate", "--json"]);
-    assert!(vesselmsr(&["remesh", s(input), "-o", s(&full), "-q"]).status.success());
+    assert!(vesselmsr(&["remesh", s(input), "-o", s(&full), "-q"])
+        .status
+        .success());
     (r, lean, full)
 }
 
@@ -74,10 +76,11 @@ fn remesh_decimate_on_the_shipped_aorta() {
         .iter()
         .map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
         .collect();
-    assert!(mesh
-        .vertices
-        .iter()
-        .all(|p| kept.contains(&[p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])));
+    assert!(mesh.vertices.iter().all(|p| kept.contains(&[
+        p.x.to_bits(),
+        p.y.to_bits(),
+        p.z.to_bits()
+    ])));
 }
 
 #[test]
@@ -128,7 +131,9 @@ mod slow {
             let after = r["decimate"]["faces_after"].as_u64().unwrap() as usize;
             // The input with its open ends capped: the surface both remeshes follow.
             let capped = dir.path().join("capped.stl");
-            assert!(vesselmsr(&["cap", s(&input), "-o", s(&capped), "-q"]).status.success());
+            assert!(vesselmsr(&["cap", s(&input), "-o", s(&capped), "-q"])
+                .status
+                .success());
             let (to_full, lean_to_input, full_to_input) = (
                 hausdorff(&full, &lean) / h,
                 hausdorff(&capped, &lean) / h,
@@ -143,7 +148,11 @@ mod slow {
             assert!(to_full <= 0.52, "{file}");
             // Within 0.6h of the input, except where the remesh itself is farther: the rims of
             // open ends, which the level set rounds off (0.58h to 0.85h on these vessels).
-            let bound = if loops == 0 { 0.6 } else { 0.6f64.max(full_to_input + 0.05) };
+            let bound = if loops == 0 {
+                0.6
+            } else {
+                0.6f64.max(full_to_input + 0.05)
+            };
             assert!(lean_to_input <= bound, "{file}: {lean_to_input} > {bound}");
         }
     }

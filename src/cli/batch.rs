@@ -110,8 +110,9 @@ pub fn run(ctx: &Context, args: &BatchArgs) -> anyhow::Result<()> {
     let ext = match &args.format {
         Some(f) => {
             let ext = f.trim_start_matches('.').to_ascii_lowercase();
-            MeshFormat::from_path(Path::new(&format!("x.{ext}")))
-                .map_err(|_| anyhow::anyhow!("--format {f:?}: expected stl, obj, ply, vtp or vtk"))?;
+            MeshFormat::from_path(Path::new(&format!("x.{ext}"))).map_err(|_| {
+                anyhow::anyhow!("--format {f:?}: expected stl, obj, ply, vtp or vtk")
+            })?;
             Some(ext)
         }
         None => None,
@@ -121,14 +122,15 @@ pub fn run(ctx: &Context, args: &BatchArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}: cannot create the output folder", args.output.display()))?;
     let previous = read_previous(&args.output)?;
     let done = |job: &Job| {
-        previous.iter().find(|r| {
-            r.id == job.id && (r.status == "ok" || !args.retry_failed)
-        })
+        previous
+            .iter()
+            .find(|r| r.id == job.id && (r.status == "ok" || !args.retry_failed))
     };
     // Rows in manifest order: those kept from the previous run, the others filled in as they end.
-    let rows: Mutex<Vec<Option<Row>>> =
-        Mutex::new(jobs.iter().map(|j| done(j).cloned()).collect());
-    let todo: Vec<usize> = (0..jobs.len()).filter(|&k| done(&jobs[k]).is_none()).collect();
+    let rows: Mutex<Vec<Option<Row>>> = Mutex::new(jobs.iter().map(|j| done(j).cloned()).collect());
+    let todo: Vec<usize> = (0..jobs.len())
+        .filter(|&k| done(&jobs[k]).is_none())
+        .collect();
     if !ctx.quiet && todo.len() < jobs.len() {
         eprintln!(
             "vesselmsr: batch: {} of {} meshes already in {} (skipped)",
@@ -311,7 +313,8 @@ fn write_summaries(dir: &Path, rows: &[Option<Row>]) -> anyhow::Result<()> {
     let bytes = csv_text.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?;
     let path = dir.join("summary.csv");
     write_atomic(&path, |out| {
-        out.write_all(&bytes).map_err(|e| crate::Error::io(&path, e))
+        out.write_all(&bytes)
+            .map_err(|e| crate::Error::io(&path, e))
     })?;
     Ok(())
 }
@@ -357,7 +360,12 @@ fn run_one(job: &Job, args: &BatchArgs, ext: Option<&str>) -> Row {
 
 /// Runs the command on `job` through the single command's code, writing its outputs and
 /// filling the row's figures.
-fn run_command(job: &Job, args: &BatchArgs, ext: Option<&str>, row: &mut Row) -> anyhow::Result<()> {
+fn run_command(
+    job: &Job,
+    args: &BatchArgs,
+    ext: Option<&str>,
+    row: &mut Row,
+) -> anyhow::Result<()> {
     let ext = match ext {
         Some(e) => e.to_string(),
         None => {
@@ -370,11 +378,7 @@ fn run_command(job: &Job, args: &BatchArgs, ext: Option<&str>, row: &mut Row) ->
     };
     let output = args.output.join(format!("{}.{ext}", job.id));
     let report = args.output.join(format!("{}.report.json", job.id));
-    let (mesh, output_s, report_s) = (
-        job.mesh.as_os_str(),
-        output.as_os_str(),
-        report.as_os_str(),
-    );
+    let (mesh, output_s, report_s) = (job.mesh.as_os_str(), output.as_os_str(), report.as_os_str());
     // The single command's own parser, so its defaults are the batch's.
     let line: Vec<&std::ffi::OsStr> = match args.command {
         BatchCommand::Repair => vec![
@@ -414,7 +418,12 @@ fn run_command(job: &Job, args: &BatchArgs, ext: Option<&str>, row: &mut Row) ->
             );
             row.notices = r["notices"]
                 .as_array()
-                .map(|n| n.iter().filter_map(Value::as_str).collect::<Vec<_>>().join("; "))
+                .map(|n| {
+                    n.iter()
+                        .filter_map(Value::as_str)
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                })
                 .unwrap_or_default();
             row.regions = Some(regions.len());
             row.max_stenosis_pct = regions
@@ -446,4 +455,3 @@ fn run_command(job: &Job, args: &BatchArgs, ext: Option<&str>, row: &mut Row) ->
     }
     Ok(())
 }
-

@@ -20,16 +20,16 @@ use crate::report::repair_picture::{render_repair, RepairPictureOptions};
 use crate::report::repair_report::{
     region_reports, surface_measures, RegionReport, SurfaceMeasures,
 };
+use crate::TriMesh;
 use anyhow::Context as _;
 use serde::Serialize;
-use crate::TriMesh;
 use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(Debug, clap::Args)]
 pub struct RepairArgs {
-    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk), in any length unit (mm, cm, m): every length below is in
-    /// the same unit.
+    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk), in any length unit (mm, cm, m): every length
+    /// below is in the same unit.
     pub mesh: PathBuf,
     /// Repaired mesh (.stl, .obj, .ply, .vtp or .vtk); written only if the repair succeeds.
     #[arg(short, long, value_name = "OUT")]

@@ -89,15 +89,12 @@ fn parse_mrk_json(text: &str) -> std::result::Result<Vec<Point3<f64>>, String> {
     for (m, markup) in markups.iter().enumerate() {
         let frame = match markup.get("coordinateSystem") {
             None => MarkupsFrame::Lps,
-            Some(v) => v
-                .as_str()
-                .and_then(MarkupsFrame::parse)
-                .ok_or_else(|| {
-                    format!(
-                        "markup {}: coordinateSystem {v} is neither \"LPS\" nor \"RAS\"",
-                        m + 1
-                    )
-                })?,
+            Some(v) => v.as_str().and_then(MarkupsFrame::parse).ok_or_else(|| {
+                format!(
+                    "markup {}: coordinateSystem {v} is neither \"LPS\" nor \"RAS\"",
+                    m + 1
+                )
+            })?,
         };
         let Some(controls) = markup.get("controlPoints") else {
             continue;

@@ -7,8 +7,8 @@
 
 use super::measures::{area, area_centroid, signed_volume_about};
 use super::topology::boundary_loops;
-use nalgebra::{Point3, Vector3};
 use crate::TriMesh;
+use nalgebra::{Point3, Vector3};
 
 /// Millimetres in one `unit` (`mm`, `cm`, `m`, `um`/`µm`, `in` and their spelt-out names, any
 /// case), or None for a unit it does not know (such as the default "file units").

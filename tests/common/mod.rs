@@ -129,7 +129,15 @@ pub fn phantom(kind: &str, dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
     let path = |p: &PathBuf| p.to_str().unwrap().to_string();
     let (damaged, truth, regions) = (path(&files.0), path(&files.1), path(&files.2));
     let args = [
-        "phantom", kind, "-o", &damaged, "--truth", &truth, "--regions-out", &regions, "-q",
+        "phantom",
+        kind,
+        "-o",
+        &damaged,
+        "--truth",
+        &truth,
+        "--regions-out",
+        &regions,
+        "-q",
     ];
     let out = vesselmsr(&args);
     assert!(

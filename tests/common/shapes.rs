@@ -53,9 +53,10 @@ pub fn odd_octahedron() -> TriMesh {
 /// wall there.
 pub fn punch_hole(mesh: &TriMesh, center: Point3<f64>, radius: f64) -> TriMesh {
     let mut holed = mesh.clone();
-    holed
-        .faces
-        .retain(|f| f.iter().all(|&v| (mesh.vertices[v as usize] - center).norm() > radius));
+    holed.faces.retain(|f| {
+        f.iter()
+            .all(|&v| (mesh.vertices[v as usize] - center).norm() > radius)
+    });
     assert!(holed.num_faces() < mesh.num_faces(), "nothing punched");
     holed
 }
