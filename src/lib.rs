@@ -2,8 +2,8 @@
 //! representation (MSR) and surface inpainting of Dong, Chien, Shen and Osher.
 //!
 //! Data types live apart from the operations on them: `mesh` (the triangle mesh, its topology and
-//! measures, capping of open ends), `io` (meshes as STL, OBJ and PLY; grids as npy, vti, nrrd;
-//! npz archives), `bvh` (closest point, ray casts and the fast generalized winding number on a
+//! measures, capping of open ends), `io` (meshes as STL, OBJ, PLY, VTP and VTK; Slicer
+//! markups; grids as npy, vti, nrrd; npz archives), `bvh` (closest point, ray casts and the fast generalized winding number on a
 //! bounding volume hierarchy), `grid` (the dense grid and its transform), `levelset` (voxelize,
 //! redistance, marching cubes), `motion` (diffusion and threshold-dynamics flows), `msr` (the
 //! multiscale representation: decompose, reconstruct, archive), `report` (figures), and `cli`

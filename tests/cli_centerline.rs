@@ -20,18 +20,7 @@ fn s(p: &Path) -> &str {
 
 /// The stenosis phantom (damaged, truth) written into `d` by the CLI.
 fn stenosis_phantom(d: &Path) -> (std::path::PathBuf, std::path::PathBuf) {
-    let (damaged, truth, regions) = (d.join("s.stl"), d.join("t.stl"), d.join("r.json"));
-    let out = vesselmsr(&[
-        "phantom",
-        "stenosis",
-        "-o",
-        s(&damaged),
-        "--truth",
-        s(&truth),
-        "--regions-out",
-        s(&regions),
-    ]);
-    assert!(out.status.success());
+    let (damaged, truth, _) = common::phantom("stenosis", d);
     (damaged, truth)
 }
 

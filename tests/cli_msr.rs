@@ -1,6 +1,6 @@
 //! `vesselmsr decompose` and `vesselmsr reconstruct` through the CLI, on the shipped aorta at a
 //! coarse voxel: the archive round trip gives the input vertices back to 1e-5h; the per-level
-//! PLY files carry the scales and their details; the figures show the histograms and the
+//! PLY files carry the scales and their details (as do VTP and VTK ones, on a sphere); the figures show the histograms and the
 //! surfaces; the level-set reconstruction rebuilds each level close to the samples; bad input
 //! (levels 0, too many levels for the time, a shape that vanishes, a missing, truncated or edited
 //! archive, a level beyond the archive) gives exit status 2, one line naming the file, and no
@@ -435,4 +435,66 @@ fn reconstruct_refuses_bad_archives_and_writes_nothing() {
     );
     vesselmsr_json(&["--json", "reconstruct", s(&archive), "-o", s(&out)]);
     assert!(out.exists());
+}
+
+#[test]
+fn levels_as_vtp_and_vtk() {
+    // A small sphere, one level: the scales written as VTK XML PolyData and legacy VTK carry the
+    // same meshes and details as the PLY files.
+    let tmp = tempfile::tempdir().unwrap();
+    let sphere = tmp.path().join("sphere.stl");
+    vesselmsr::io::write_mesh(
+        &sphere,
+        &vesselmsr::mesh::primitives::icosphere(3, 4.0, nalgebra::Point3::origin()),
+    )
+    .unwrap();
+    let mut scales = Vec::new();
+    for ext in ["ply", "vtp", "vtk"] {
+        let dir = tmp.path().join(ext);
+        let out = tmp.path().join(format!("{ext}.npz"));
+        let args = [
+            "decompose",
+            s(&sphere),
+            "-o",
+            s(&out),
+            "--voxel",
+            "0.5",
+            "--levels",
+            "1",
+            "--levels-dir",
+            s(&dir),
+            "--levels-format",
+            ext,
+            "-q",
+        ];
+        assert!(vesselmsr(&args).status.success(), "{args:?}");
+        let level: Vec<_> = (0..=1)
+            .map(|k| {
+                vesselmsr::io::read_mesh_with_scalars(&dir.join(format!("level_{k}.{ext}")))
+                    .unwrap()
+            })
+            .collect();
+        assert!(level[0].1.is_empty());
+        assert_eq!(level[1].1.len(), 1);
+        assert_eq!(level[1].1[0].0, "detail");
+        scales.push(level);
+    }
+    assert_eq!(scales[1], scales[0]);
+    assert_eq!(scales[2], scales[0]);
+    let bad = tmp.path().join("bad.npz");
+    assert_fails(
+        &[
+            "decompose",
+            s(&sphere),
+            "-o",
+            s(&bad),
+            "--levels-dir",
+            s(&tmp.path().join("never")),
+            "--levels-format",
+            "stl",
+        ],
+        None,
+        "--levels-format",
+        &[&bad, &tmp.path().join("never")],
+    );
 }

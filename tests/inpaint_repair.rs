@@ -324,8 +324,6 @@ fn cli_bad_input_exits_2_without_output() {
     let out = tmp.path().join("out.stl");
     let o = out.to_string_lossy().into_owned();
     let aorta = common::aorta();
-    let closed = p("closed.stl");
-    assert!(vesselmsr(&["cap", &aorta, "-o", &closed]).status.success());
     std::fs::write(p("bad.json"), "{\"regions\": [{\"centre\": [0,0,0]}]}").unwrap();
     std::fs::write(p("garbage.json"), "not json").unwrap();
     let (bad, garbage, missing) = (p("bad.json"), p("garbage.json"), p("missing.json"));
@@ -351,11 +349,6 @@ fn cli_bad_input_exits_2_without_output() {
             vec!["repair", &aorta, "-o", &o, "--region", "1,2,3"],
             "x,y,z,r",
         ),
-        (
-            vec!["repair", &closed, "-o", &o, "--holes"],
-            "no boundary loops",
-        ),
-        (vec!["repair", &aorta, "-o", &o, "--holes"], "no holes"),
         (
             vec!["repair", &aorta, "-o", &o, "--regions", &bad],
             "bad.json",

@@ -10,9 +10,9 @@ use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
 pub struct CapArgs {
-    /// Input mesh (.stl, .obj or .ply).
+    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk).
     pub mesh: PathBuf,
-    /// Output mesh (.stl, .obj or .ply); written only if capping succeeds.
+    /// Output mesh (.stl, .obj, .ply, .vtp or .vtk); written only if capping succeeds.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// Target edge length of cap triangles, in the mesh's own units (default: the mean length

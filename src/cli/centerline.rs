@@ -16,7 +16,7 @@ use std::time::Instant;
 
 #[derive(Debug, clap::Args)]
 pub struct CenterlineArgs {
-    /// Input mesh (.stl, .obj or .ply), closed or with open vessel ends.
+    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk), closed or with open vessel ends.
     pub mesh: PathBuf,
     /// Output: .json (every point, radius, tangent, branch, junction, endpoint) or .vtp.
     #[arg(short, long)]
@@ -88,7 +88,7 @@ fn output_format(path: &Path) -> anyhow::Result<Format> {
 /// Where `profile` and `stenosis` get their centreline: a file, or computed from the mesh.
 #[derive(Debug, clap::Args)]
 pub struct CenterlineSource {
-    /// Input mesh (.stl, .obj or .ply).
+    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk).
     pub mesh: PathBuf,
     /// A centreline written by `vesselmsr centerline -o CL.json` (default: computed).
     #[arg(long, value_name = "CL.json")]

@@ -5,8 +5,8 @@
 //!
 //! The mesh is voxelized, the grid padded for the motion (as `evolve` does), and the levels
 //! t_i = i·T/N computed by the chosen motion (default `vpmcf`, the paper's Figure 1). Optional
-//! outputs for looking at the result: `--levels-dir` writes every scale S_0..S_N as PLY (S_k,
-//! k ≥ 1, with the per-vertex scalar `detail` = w_k, for ParaView or MeshLab), `--figures` the
+//! outputs for looking at the result: `--levels-dir` writes every scale S_0..S_N as PLY, VTP or
+//! VTK (`--levels-format`; S_k, k ≥ 1, with the per-vertex scalar `detail` = w_k, for ParaView or MeshLab), `--figures` the
 //! detail histograms per level (the paper's Figure 2) and a strip of S_0..S_N coloured by w_k
 //! (its Figure 1); `--measure-rebuilds` the paper's Figure 1 measure of the level-set
 //! reconstruction, each S_{i−1} against its rebuild from the exact φ_i
@@ -35,7 +35,7 @@ use std::time::Instant;
 
 #[derive(Debug, clap::Args)]
 pub struct DecomposeArgs {
-    /// Input mesh (.stl, .obj or .ply).
+    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk).
     pub mesh: PathBuf,
     /// Output archive (.npz; numpy's `np.load` opens it).
     #[arg(short, long, value_name = "MSR.npz")]
@@ -60,9 +60,14 @@ pub struct DecomposeArgs {
     #[command(flatten)]
     pub grid: GridArgs,
     /// Write each scale S_0..S_N as DIR/level_K.ply (S_K, K ≥ 1, with the per-vertex scalar
-    /// `detail` = w_K).
+    /// `detail` = w_K; see --levels-format).
     #[arg(long, value_name = "DIR")]
     pub levels_dir: Option<PathBuf>,
+    /// File format of the --levels-dir scales: ply (for MeshLab), vtp (VTK XML PolyData, for
+    /// ParaView and 3D Slicer) or vtk (legacy VTK); the detail is a point-data array in the last
+    /// two.
+    #[arg(long, value_name = "EXT", default_value = "ply")]
+    pub levels_format: String,
     /// Write DIR/details_histograms.png (w_i in units of h, one panel per level) and
     /// DIR/levels_strip.png (S_0..S_N coloured by w_i).
     #[arg(long, value_name = "DIR")]
@@ -139,6 +144,12 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
         is_npz,
         "{}: the archive must be a .npz file",
         args.output.display()
+    );
+    let levels_ext = args.levels_format.to_ascii_lowercase();
+    anyhow::ensure!(
+        matches!(levels_ext.as_str(), "ply" | "vtp" | "vtk"),
+        "--levels-format must be ply, vtp or vtk, got {:?}",
+        args.levels_format
     );
     let velocity = Velocity::from_name(&velocity_name(args.velocity), args.c)?;
     if args.measure_rebuilds == Some(0) {
@@ -242,7 +253,7 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
     if let Some(dir) = &args.levels_dir {
         std::fs::create_dir_all(dir).with_context(|| format!("{}", dir.display()))?;
         for (k, scale) in scales.iter().enumerate() {
-            let path = dir.join(format!("level_{k}.ply"));
+            let path = dir.join(format!("level_{k}.{levels_ext}"));
             let detail: Vec<f32>;
             let scalars: Vec<(&str, &[f32])> = if k == 0 {
                 Vec::new()

@@ -45,9 +45,9 @@ pub enum VelocityName {
 
 #[derive(Debug, clap::Args)]
 pub struct EvolveArgs {
-    /// Input mesh (.stl, .obj or .ply).
+    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk).
     pub mesh: PathBuf,
-    /// Output mesh (.stl, .obj or .ply): the evolved surface.
+    /// Output mesh (.stl, .obj, .ply, .vtp or .vtk): the evolved surface.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// Normal velocity of the motion.

@@ -2,6 +2,7 @@
 //! `--threads`, `--json`), and one file per command. Errors are printed as one line on stderr with
 //! exit status 2; outputs are only written when the whole command succeeded.
 
+mod batch;
 mod cap;
 mod centerline;
 mod compare;
@@ -43,7 +44,7 @@ pub enum Command {
     /// Validate a mesh and print its measures (counts, boundary loops, watertightness, orientation,
     /// volume, area, bounding box, mean edge length, genus).
     Info {
-        /// Input mesh (.stl, .obj or .ply).
+        /// Input mesh (.stl, .obj, .ply, .vtp or .vtk).
         mesh: PathBuf,
     },
     /// Close every boundary loop (open vessel ends, holes) with refined planar caps and write a
@@ -80,6 +81,9 @@ pub enum Command {
     /// Synthetic damaged vessel (tube, curved, bifurcation, stenosis or occlusion) with its
     /// intact truth and the regions D covering the damage: test data for inpainting.
     Phantom(phantom::PhantomArgs),
+    /// Every mesh of a cohort (a manifest CSV or a folder) through repair --holes, stenosis or
+    /// remesh, resumable, with one summary row per mesh in OUTDIR/summary.csv and summary.json.
+    Batch(batch::BatchArgs),
 }
 
 /// Global settings every command sees.
@@ -131,6 +135,7 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
         Command::Phantom(args) => phantom::run(&ctx, &args),
         Command::Profile(args) => profile::run(&ctx, &args),
         Command::Stenosis(args) => stenosis::run(&ctx, &args),
+        Command::Batch(args) => batch::run(&ctx, &args),
     }
 }
 
@@ -148,6 +153,17 @@ fn one_line(e: &anyhow::Error) -> String {
         }
     }
     message.replace('\n', " ")
+}
+
+/// Writes a value as pretty JSON to `path` (atomically).
+fn write_json_file<T: serde::Serialize>(path: &std::path::Path, value: &T) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(value)?;
+    crate::io::write_atomic(path, |out| {
+        out.write_all(text.as_bytes())
+            .and_then(|_| out.write_all(b"\n"))
+            .map_err(|e| crate::Error::io(path, e))
+    })?;
+    Ok(())
 }
 
 /// Prints a value as pretty JSON on stdout.

@@ -15,10 +15,10 @@ use std::path::{Path, PathBuf};
 pub struct PhantomArgs {
     /// Phantom kind: tube, curved, bifurcation, stenosis or occlusion.
     pub kind: String,
-    /// Damaged vessel mesh (.stl, .obj or .ply).
+    /// Damaged vessel mesh (.stl, .obj, .ply, .vtp or .vtk).
     #[arg(short, long, value_name = "DAMAGED")]
     pub output: PathBuf,
-    /// Intact (ground truth) vessel mesh (.stl, .obj or .ply).
+    /// Intact (ground truth) vessel mesh (.stl, .obj, .ply, .vtp or .vtk).
     #[arg(long, value_name = "TRUTH")]
     pub truth: PathBuf,
     /// Regions file (JSON balls) covering the damage.

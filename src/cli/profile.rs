@@ -6,6 +6,7 @@ use super::{print_json, progress, Context};
 use crate::centerline::profile::measure_profiles;
 use crate::centerline::stenosis::{find_stenoses, StenosisFindOptions};
 use crate::io::write_atomic;
+use crate::mesh::units::{check_vessel_scale, VesselScaleOptions};
 use crate::report::image::write_png;
 use crate::report::profile_plot::profile_picture;
 use crate::Error;
@@ -30,6 +31,13 @@ pub struct ProfileArgs {
 pub fn run(ctx: &Context, args: &ProfileArgs) -> anyhow::Result<()> {
     let bar = progress::spinner(ctx.quiet, "measuring the diameter profiles");
     let (mesh, cl) = centerline_for(ctx, &args.source)?;
+    let scale = args
+        .units
+        .as_deref()
+        .and_then(|u| check_vessel_scale(&mesh, u, &VesselScaleOptions::default()));
+    if let (Some(n), false) = (scale, ctx.quiet) {
+        bar.suspend(|| eprintln!("vesselmsr: notice: {}: {n}", args.source.mesh.display()));
+    }
     let profiles = measure_profiles(&mesh, &cl);
     let image = match &args.picture {
         Some(_) => {

@@ -41,7 +41,7 @@ pub enum Method {
 pub struct ReconstructArgs {
     /// The multiscale representation (.npz written by `decompose`).
     pub archive: PathBuf,
-    /// Output mesh (.stl, .obj or .ply).
+    /// Output mesh (.stl, .obj, .ply, .vtp or .vtk).
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// How the surface is rebuilt.

@@ -6,16 +6,22 @@ use super::{print_json, progress, Context};
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
 use crate::centerline::{compute_centerline, CenterlineOptions};
-use crate::inpaint::holes::{hole_regions, LoopKind, LoopOptions};
+use crate::inpaint::holes::{classify_loops, hole_regions, LoopKind, LoopOptions};
 use crate::inpaint::region::{parse_ball, read_regions, validate_regions, Ball};
 use crate::inpaint::guided::GuideKind;
-use crate::inpaint::repair::{repair_with_centerline, InpaintMethod, RepairOptions};
+use crate::inpaint::repair::{repair_with_centerline, InpaintMethod, Repair, RepairOptions};
 use crate::io::{read_mesh, write_atomic, write_mesh, MeshFormat};
+use crate::mesh::cap::{cap_holes, CapOptions};
+use crate::mesh::decimate::{decimate_mesh, DecimateOptions, DecimateReport};
 use crate::mesh::info::mesh_info;
+use crate::mesh::orient::orient_outward;
+use crate::mesh::topology::EdgeMap;
+use crate::mesh::units::{check_vessel_scale, VesselScaleOptions};
 use crate::report::repair_picture::{render_repair, RepairPictureOptions};
 use crate::report::repair_report::{
     region_reports, surface_measures, RegionReport, SurfaceMeasures,
 };
+use crate::TriMesh;
 use anyhow::Context as _;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -23,19 +29,21 @@ use std::time::Instant;
 
 #[derive(Debug, clap::Args)]
 pub struct RepairArgs {
-    /// Input mesh (.stl, .obj or .ply), in any length unit (mm, cm, m): every length below is in
-    /// the same unit.
+    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk), in any length unit (mm, cm, m): every length
+    /// below is in the same unit.
     pub mesh: PathBuf,
-    /// Repaired mesh (.stl, .obj or .ply); written only if the repair succeeds.
+    /// Repaired mesh (.stl, .obj, .ply, .vtp or .vtk); written only if the repair succeeds.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// A region D to inpaint: the ball of centre (x, y, z) and radius r, world units. Repeatable.
     #[arg(long, value_name = "x,y,z,r", allow_hyphen_values = true)]
     pub region: Vec<String>,
     /// A JSON regions file: {"regions": [{"center": [x, y, z], "radius": r}, ...], "points":
-    /// [[x, y, z], ...]}; each picked surface point becomes a ball of 1.5 healthy vessel radii
-    /// (the centreline's healthy reference there; else the local radius).
-    #[arg(long, value_name = "FILE.json")]
+    /// [[x, y, z], ...]}, or a 3D Slicer markups file (.mrk.json or .fcsv: its control points
+    /// are picked points, turned from RAS into the mesh's LPS when stored in RAS); each picked
+    /// surface point becomes a ball of 1.5 healthy vessel radii (the centreline's healthy
+    /// reference there; else the local radius).
+    #[arg(long, value_name = "FILE")]
     pub regions: Option<PathBuf>,
     /// Every boundary loop of the input that is not an open vessel end (a near-planar loop across
     /// the vessel) becomes a region.
@@ -81,6 +89,10 @@ pub struct RepairArgs {
     /// Keep the input's open vessel ends open (for flow extensions); by default they are capped.
     #[arg(long)]
     pub open_ends: bool,
+    /// Simplify the output by quadric edge collapses, its Hausdorff distance to the undecimated
+    /// output held within this many voxels (default 0.5); the report measures what is written.
+    #[arg(long, value_name = "VOXELS", num_args = 0..=1, default_missing_value = "0.5")]
+    pub decimate: Option<f64>,
     /// Write the full report as JSON to this file.
     #[arg(long, value_name = "R.json")]
     pub report: Option<PathBuf>,
@@ -127,18 +139,21 @@ struct Parameters {
     axes: Vec<[f64; 3]>,
     /// The centreline fill's curves, by kind.
     guides: Vec<GuideKind>,
-    notices: Vec<String>,
 }
 
 #[derive(Serialize)]
-struct Report {
+pub(super) struct Report {
     units: String,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    notices: Vec<String>,
     input: MeshPart,
     input_capped: bool,
     output: MeshPart,
     regions: Vec<RegionReport>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     loops: Vec<LoopReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    decimate: Option<DecimateReport>,
     watertight: bool,
     iterations: usize,
     converged: bool,
@@ -147,6 +162,18 @@ struct Report {
 }
 
 pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let report = repair_file(ctx, args)?;
+    if ctx.json {
+        return print_json(&report);
+    }
+    print_summary(&report, start.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// The whole `repair` command but the printing: reads, repairs, writes the outputs and returns
+/// the report (also for `batch`).
+pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Report> {
     let start = Instant::now();
     MeshFormat::from_path(&args.output)?;
     let method: InpaintMethod = args.method.parse()?;
@@ -158,6 +185,12 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
         if let Some(v) = v {
             anyhow::ensure!(v.is_finite() && v > 0.0, "{name} must be > 0, got {v}");
         }
+    }
+    if let Some(v) = args.decimate {
+        anyhow::ensure!(
+            v.is_finite() && v > 0.0,
+            "--decimate must be a positive number of voxels, got {v}"
+        );
     }
     if let Some(v) = args.voxel {
         anyhow::ensure!(
@@ -183,6 +216,10 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
     }
     let mesh = read_mesh(&args.mesh)?;
     let read_secs = start.elapsed().as_secs_f64();
+    let mut notices = Vec::new();
+    if let Some(n) = check_vessel_scale(&mesh, &args.units, &VesselScaleOptions::default()) {
+        notices.push(n);
+    }
     // The input's centreline: healthy radii for picked points, detected narrowings, and the
     // stenosis measured along it in the report.
     let centerline_start = Instant::now();
@@ -228,11 +265,24 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
     }
     let mut loops = Vec::new();
     if args.holes {
-        let (holes, infos) = hole_regions(&mesh, &LoopOptions::default())
-            .with_context(|| format!("{}: --holes", args.mesh.display()))?;
-        for b in holes {
-            balls.push(b);
-            sources.push("hole".into());
+        let infos = classify_loops(&mesh, &LoopOptions::default());
+        if infos.iter().any(|l| l.kind == LoopKind::Hole) {
+            let (holes, _) = hole_regions(&mesh, &LoopOptions::default())
+                .with_context(|| format!("{}: --holes", args.mesh.display()))?;
+            for b in holes {
+                balls.push(b);
+                sources.push("hole".into());
+            }
+        } else {
+            notices.push(if infos.is_empty() {
+                "no holes found (the mesh is closed): nothing to inpaint".to_string()
+            } else {
+                format!(
+                    "no holes found ({} boundary loop(s), all open vessel ends): nothing to inpaint{}",
+                    infos.len(),
+                    if args.open_ends { "" } else { "; the ends are capped" }
+                )
+            });
         }
         loops = infos
             .iter()
@@ -247,7 +297,18 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
             })
             .collect();
     }
-    validate_regions(&mesh, &balls).with_context(|| format!("{}", args.mesh.display()))?;
+    let nothing_to_do = args.holes && balls.is_empty();
+    if nothing_to_do && args.picture.is_some() {
+        notices.push("no picture written: nothing was inpainted".into());
+    }
+    if !nothing_to_do {
+        validate_regions(&mesh, &balls).with_context(|| format!("{}", args.mesh.display()))?;
+    }
+    if !ctx.quiet {
+        for n in &notices {
+            eprintln!("vesselmsr: notice: {}: {n}", args.mesh.display());
+        }
+    }
     let opts = RepairOptions {
         method,
         voxel: args.voxel,
@@ -262,8 +323,27 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
         ..RepairOptions::default()
     };
     let bar = progress::spinner(ctx.quiet, "repairing");
-    let result = repair_with_centerline(&mesh, &balls, &opts, healthy.as_ref().map(|h| &h.centerline))
-        .with_context(|| format!("{}: repair failed", args.mesh.display()))?;
+    let mut result = if nothing_to_do {
+        unrepaired(&mesh, &opts)
+    } else {
+        repair_with_centerline(&mesh, &balls, &opts, healthy.as_ref().map(|h| &h.centerline))
+    }
+    .with_context(|| format!("{}: repair failed", args.mesh.display()))?;
+    let decimate = match args.decimate {
+        Some(voxels) if result.voxel > 0.0 => {
+            bar.set_message("decimating");
+            let (lean, done) = decimate_mesh(
+                &result.mesh,
+                &DecimateOptions {
+                    max_distance: voxels * result.voxel,
+                    ..DecimateOptions::default()
+                },
+            );
+            result.mesh = lean;
+            Some(done)
+        }
+        _ => None,
+    };
     bar.set_message("measuring");
     let measure_start = Instant::now();
     let regions = region_reports(
@@ -283,8 +363,10 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
         timings.insert(name.clone(), (*secs).into());
     }
     timings.insert("report".into(), measure_secs.into());
+    notices.extend(result.notices.iter().cloned());
     let report = Report {
         units: args.units.clone(),
+        notices,
         input: MeshPart {
             path: args.mesh.display().to_string(),
             measures: surface_measures(&input_info),
@@ -296,6 +378,7 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
         },
         regions,
         loops,
+        decimate,
         watertight: info.watertight,
         iterations: result.iterations,
         converged: result.converged,
@@ -314,7 +397,6 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
             fallback: result.fallback.clone(),
             axes: result.axes.clone(),
             guides: result.guides.clone(),
-            notices: result.notices.clone(),
         },
         timings,
     };
@@ -333,9 +415,10 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
                 .map_err(|e| crate::Error::io(path, e))
         })?;
     }
-    if let Some(path) = &args.picture {
+    if let Some(path) = args.picture.as_ref().filter(|_| !balls.is_empty()) {
+        // The input as it was, its holes open.
         render_repair(
-            &result.closed_input,
+            &mesh,
             &result.mesh,
             &balls,
             path,
@@ -353,11 +436,41 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
             );
         }
     }
-    if ctx.json {
-        return print_json(&report);
+    Ok(report)
+}
+
+/// The outcome of `--holes` on a mesh without holes: the input, its open ends capped unless
+/// they are kept open, outward; nothing inpainted.
+fn unrepaired(mesh: &TriMesh, opts: &RepairOptions) -> crate::Result<Repair> {
+    let start = Instant::now();
+    let closed_input = if opts.open_ends || EdgeMap::new(mesh).boundary_edges() == 0 {
+        mesh.clone()
+    } else {
+        cap_holes(mesh, &CapOptions::default())?.0
+    };
+    let mut output = closed_input.clone();
+    if !opts.open_ends {
+        orient_outward(&mut output);
     }
-    print_summary(&report, start.elapsed().as_secs_f64());
-    Ok(())
+    Ok(Repair {
+        mesh: output,
+        closed_input,
+        voxel: 0.0,
+        grid_dims: [0; 3],
+        radius_estimate: 0.0,
+        speed: 0.0,
+        time: 0.0,
+        epsilon: 0.0,
+        axes: Vec::new(),
+        junctions: 0,
+        iterations: 0,
+        converged: true,
+        stitched: false,
+        fallback: None,
+        guides: Vec::new(),
+        notices: Vec::new(),
+        timings: vec![("cap".into(), start.elapsed().as_secs_f64())],
+    })
 }
 
 fn print_summary(r: &Report, secs: f64) {

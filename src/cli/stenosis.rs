@@ -5,7 +5,7 @@
 use super::centerline::{centerline_for, CenterlineSource};
 use super::{print_json, progress, Context};
 use crate::centerline::profile::measure_profiles;
-use crate::centerline::stenosis::{find_stenoses, StenosisFindOptions};
+use crate::centerline::stenosis::{find_stenoses, BranchNarrowing, Lesion, StenosisFindOptions};
 
 #[derive(Debug, clap::Args)]
 pub struct StenosisArgs {
@@ -16,7 +16,18 @@ pub struct StenosisArgs {
     pub min_degree: f64,
 }
 
-pub fn run(ctx: &Context, args: &StenosisArgs) -> anyhow::Result<()> {
+/// What `stenosis --json` prints.
+#[derive(serde::Serialize)]
+pub(super) struct Stenoses {
+    mesh: std::path::PathBuf,
+    voxel: f64,
+    min_degree_pct: f64,
+    pub(super) lesions: Vec<Lesion>,
+    branches: Vec<BranchNarrowing>,
+}
+
+/// The narrowings of the command's mesh (also for `batch`).
+pub(super) fn find_in_file(ctx: &Context, args: &StenosisArgs) -> anyhow::Result<Stenoses> {
     anyhow::ensure!(
         args.min_degree.is_finite() && (0.0..100.0).contains(&args.min_degree),
         "--min-degree must be a percentage from 0 to below 100, got {}",
@@ -30,15 +41,21 @@ pub fn run(ctx: &Context, args: &StenosisArgs) -> anyhow::Result<()> {
     };
     let (lesions, branches) = find_stenoses(&cl, &profiles, &opts);
     bar.finish_and_clear();
+    Ok(Stenoses {
+        mesh: args.source.mesh.clone(),
+        voxel: cl.voxel,
+        min_degree_pct: args.min_degree,
+        lesions,
+        branches,
+    })
+}
+
+pub fn run(ctx: &Context, args: &StenosisArgs) -> anyhow::Result<()> {
+    let found = find_in_file(ctx, args)?;
     if ctx.json {
-        return print_json(&serde_json::json!({
-            "mesh": args.source.mesh,
-            "voxel": cl.voxel,
-            "min_degree_pct": args.min_degree,
-            "lesions": lesions,
-            "branches": branches,
-        }));
+        return print_json(&found);
     }
+    let (lesions, branches) = (&found.lesions, &found.branches);
     println!("{}", args.source.mesh.display());
     if lesions.is_empty() {
         println!(
@@ -50,7 +67,7 @@ pub fn run(ctx: &Context, args: &StenosisArgs) -> anyhow::Result<()> {
                 .fold(0.0, f64::max)
         );
     }
-    for l in &lesions {
+    for l in lesions {
         println!(
             "branch {} at ({:.4}, {:.4}, {:.4}), s = {:.4}: diameter {:.4} against {:.4} healthy: {:.1}% diameter, {:.1}% area stenosis, length {:.4}",
             l.branch,

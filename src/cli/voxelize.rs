@@ -11,7 +11,7 @@ use std::time::Instant;
 
 #[derive(Debug, clap::Args)]
 pub struct VoxelizeArgs {
-    /// Input mesh (.stl, .obj or .ply).
+    /// Input mesh (.stl, .obj, .ply, .vtp or .vtk).
     pub mesh: PathBuf,
     /// Output grid: .npy (NumPy, with a .npy.json sidecar holding the transform), .vti (VTK
     /// ImageData, for ParaView) or .nrrd (NRRD, for 3D Slicer and ITK).

@@ -222,7 +222,8 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// Reads a regions file (see the module docs) for `mesh`: its balls first, then one ball per
+/// Reads a regions file (see the module docs; or a 3D Slicer markups file, `.mrk.json` or
+/// `.fcsv`, whose points are picked points: [`crate::io::read_markups`]) for `mesh`: its balls first, then one ball per
 /// picked point, centred on the surface point nearest to it with radius [`PICKED_RADIUS_FACTOR`]
 /// × `healthy(point)`, or × [`local_vessel_radius`] there where that gives None. Unknown keys, malformed JSON, a point where no vessel radius
 /// can be estimated and a file listing no region at all are errors naming the file.
@@ -231,9 +232,18 @@ pub fn read_regions(
     mesh: &TriMesh,
     healthy: &dyn Fn(&Point3<f64>) -> Option<f64>,
 ) -> Result<Vec<Ball>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let file: RegionsFile = serde_json::from_str(&text)
-        .map_err(|e| Error::format(path, format!("not a regions file: {e}")))?;
+    // A 3D Slicer markups file (.mrk.json, .fcsv) lists picked points only.
+    let file = if crate::io::is_markups_path(path) {
+        let points = crate::io::read_markups(path)?;
+        RegionsFile {
+            points: points.iter().map(|p| [p.x, p.y, p.z]).collect(),
+            ..RegionsFile::default()
+        }
+    } else {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        serde_json::from_str(&text)
+            .map_err(|e| Error::format(path, format!("not a regions file: {e}")))?
+    };
     if file.regions.is_empty() && file.points.is_empty() {
         return Err(Error::format(
             path,

@@ -9,11 +9,14 @@
 //! non-degenerate triangle. Every error names the file and the problem in one line. Writers go
 //! through [`write_atomic`], so a failed write leaves no partial file.
 //!
+//! Points picked in 3D Slicer come from its markups files (`markups`: `.mrk.json`, `.fcsv`).
+//!
 //! Grids (level-set functions) are written as NumPy `.npy` with a JSON sidecar (`npy`), as
 //! VTK ImageData `.vti` (`vti`, for ParaView) and as NRRD (`nrrd`, for 3D Slicer and ITK).
 
 mod atomic;
 mod centerline;
+mod markups;
 mod npy;
 mod npz;
 mod nrrd;
@@ -28,6 +31,7 @@ mod vtp;
 
 pub use atomic::write_atomic;
 pub use centerline::{read_centerline_json, write_centerline_json, write_centerline_vtp};
+pub use markups::{is_markups_path, read_markups};
 pub use npy::{npy_sidecar_path, read_npy, write_npy, NpySidecar};
 pub use npz::{read_npz, write_npz, NpyArray, NpyData};
 pub use nrrd::{read_nrrd, write_nrrd};

@@ -118,6 +118,36 @@ pub fn aorta() -> String {
         .into_owned()
 }
 
+/// Writes the `kind` phantom (tube, curved, bifurcation, stenosis, occlusion) into `dir` by the
+/// CLI: (damaged, truth, regions file).
+pub fn phantom(kind: &str, dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
+    let files = (
+        dir.join(format!("{kind}.stl")),
+        dir.join(format!("{kind}_truth.stl")),
+        dir.join(format!("{kind}_regions.json")),
+    );
+    let path = |p: &PathBuf| p.to_str().unwrap().to_string();
+    let (damaged, truth, regions) = (path(&files.0), path(&files.1), path(&files.2));
+    let args = [
+        "phantom",
+        kind,
+        "-o",
+        &damaged,
+        "--truth",
+        &truth,
+        "--regions-out",
+        &regions,
+        "-q",
+    ];
+    let out = vesselmsr(&args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    files
+}
+
 /// Runs the CLI with `args` and checks it failed as bad input must: exit status 2, one line on
 /// stderr containing `word`, and no `output` left behind.
 pub fn assert_fails(args: &[&str], word: &str, output: &Path) {

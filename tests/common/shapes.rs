@@ -1,5 +1,6 @@
 //! Test shapes built on `vesselmsr::mesh::primitives`: the cube [lo, hi]³, whole or with one
-//! side left open; an octahedron with coordinates f32 cannot hold (for the formats' exactness).
+//! side left open; an octahedron with coordinates f32 cannot hold (for the formats' exactness);
+//! a hole punched in a wall.
 
 use nalgebra::Point3;
 use vesselmsr::mesh::primitives::box_mesh;
@@ -46,4 +47,16 @@ pub fn odd_octahedron() -> TriMesh {
         [5, 0, 2],
     ];
     TriMesh::new(vertices, faces)
+}
+
+/// `mesh` without the triangles that have a corner within `radius` of `center`: a hole in the
+/// wall there.
+pub fn punch_hole(mesh: &TriMesh, center: Point3<f64>, radius: f64) -> TriMesh {
+    let mut holed = mesh.clone();
+    holed.faces.retain(|f| {
+        f.iter()
+            .all(|&v| (mesh.vertices[v as usize] - center).norm() > radius)
+    });
+    assert!(holed.num_faces() < mesh.num_faces(), "nothing punched");
+    holed
 }
