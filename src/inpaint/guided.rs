@@ -306,13 +306,13 @@ fn plan_group(
         }
     }
     // Spurs of the damage (the skeleton of a dented lumen sprouts short, thin branches) are no
-    // vessels: an anchor needs the branch to go on outside E for two of its radii and a radius
+    // vessels: an anchor needs the branch to go on outside E for one of its radii and a radius
     // of at least a third of the widest anchor's. The same vessel reached twice (a run that
     // leaves E right where another enters) counts once.
     let widest = stubs.iter().map(|s| s.anchor.radius).fold(0.0, f64::max);
     let mut keep: Vec<bool> = stubs
         .iter()
-        .map(|s| s.outside >= 2.0 * s.anchor.radius && s.anchor.radius >= widest / 3.0)
+        .map(|s| s.outside >= s.anchor.radius && s.anchor.radius >= widest / 3.0)
         .collect();
     // Two anchors closer than half a radius read the same section (two branches leaving one
     // junction node, when no section between the junction and D is clear of D): the one that

@@ -35,6 +35,7 @@ use crate::levelset::redistance::{redistance, RedistanceOptions, RedistanceSchem
 use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
 use crate::mesh::cap::{cap_holes, CapOptions};
 use crate::mesh::measures::{bounding_box, mean_edge_length};
+use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
 use crate::motion::diffusion::diffuse;
 use crate::motion::{Flow, FlowOptions, Velocity};
@@ -252,11 +253,17 @@ pub fn repair_with_centerline(
             }
         }
     }
-    let closed_input = if opts.open_ends || EdgeMap::new(mesh).boundary_edges() == 0 {
+    let mut closed_input = if opts.open_ends || EdgeMap::new(mesh).boundary_edges() == 0 {
         mesh.clone()
     } else {
         cap_holes(mesh, &CapOptions::default())?.0
     };
+    // An inward-facing input (negative enclosed volume) is turned outward, so that the
+    // patch, the stitch and every volume of the report agree.
+    let mut notices = Vec::new();
+    if orient_outward(&mut closed_input) > 0 {
+        notices.push("the input faced inward (negative volume): its triangles were flipped".into());
+    }
     lap("cap", &mut timings);
     let (lo, hi) = bounding_box(&closed_input);
     let h = match opts.voxel {
@@ -360,7 +367,6 @@ pub fn repair_with_centerline(
     let mut axes = Vec::new();
     let mut junctions = 0;
     let mut guides = Vec::new();
-    let mut notices = Vec::new();
     let mut iterations = 1;
     let mut converged = true;
     let mut psi = match opts.method {
