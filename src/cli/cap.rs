@@ -1,5 +1,6 @@
 //! `vesselmsr cap MESH -o OUT`: close every boundary loop and write a watertight, outward mesh.
 
+use super::outputs::Outputs;
 use super::{print_json, progress, Context};
 use crate::io::{read_mesh, write_mesh, MeshFormat};
 use crate::mesh::cap::{cap_holes, CapOptions, CapReport};
@@ -43,8 +44,9 @@ pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
             "--target-edge must be a positive length, got {l}"
         );
     }
-    // Refuse an unwritable output format before any work is done.
+    // Refuse an unwritable output format or folder before any work is done.
     MeshFormat::from_path(&args.output)?;
+    let mut outputs = Outputs::new(&[&args.output], &[])?;
     let orient = !args.no_orient;
     let bar = progress::spinner(ctx.quiet, "capping boundary loops");
     let mut mesh = read_mesh(&args.mesh)?;
@@ -72,17 +74,16 @@ pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
             input.leaks().join(", ")
         );
     }
-    write_mesh(&args.output, &capped)?;
+    outputs.write(&args.output, |p| write_mesh(p, &capped))?;
+    outputs.commit()?;
     bar.finish_and_clear();
-    if !ctx.quiet {
-        for m in &report.messages {
-            eprintln!("vesselmsr: notice: {m}");
-        }
-        if inconsistent_faces_flipped > 0 {
-            eprintln!(
-                "vesselmsr: notice: {inconsistent_faces_flipped} triangles were wound against their neighbours and were flipped"
-            );
-        }
+    for m in &report.messages {
+        ctx.notice(m);
+    }
+    if inconsistent_faces_flipped > 0 {
+        ctx.notice(&format!(
+            "{inconsistent_faces_flipped} triangles were wound against their neighbours and were flipped"
+        ));
     }
     if ctx.json {
         return print_json(&CapOutput {

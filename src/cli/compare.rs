@@ -34,10 +34,8 @@ pub fn run(ctx: &Context, args: &CompareArgs) -> anyhow::Result<()> {
     let a = read_mesh(&args.a)?;
     let b = read_mesh(&args.b)?;
     let (info_a, info_b) = (mesh_info(&a), mesh_info(&b));
-    if !ctx.quiet {
-        if let Some(note) = units_notice(&info_a, &info_b) {
-            eprintln!("vesselmsr: notice: {note}");
-        }
+    if let Some(note) = units_notice(&info_a, &info_b) {
+        ctx.notice(&note);
     }
     let distance = surface_distance(
         &a,

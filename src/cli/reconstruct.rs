@@ -15,6 +15,7 @@
 //! across a curved S_{i−1}, which are not errors of the reconstruction). A missing, damaged or
 //! foreign archive, or a K beyond its levels, is refused before anything is written.
 
+use super::outputs::Outputs;
 use super::{print_json, progress, Context};
 use crate::bvh::MeshBvh;
 use crate::io::{write_mesh, MeshFormat};
@@ -84,6 +85,7 @@ struct ReconstructOutput {
 
 pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
     MeshFormat::from_path(&args.output)?;
+    let mut outputs = Outputs::new(&[&args.output], &[])?;
     let msr = read_msr(&args.archive)?;
     let n = msr.levels();
     let k = args.level;
@@ -180,7 +182,8 @@ pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
             (surface, "levelset")
         }
     };
-    write_mesh(&args.output, &surface)?;
+    outputs.write(&args.output, |p| write_mesh(p, &surface))?;
+    outputs.commit()?;
     let out = ReconstructOutput {
         voxel: h,
         method,

@@ -4,6 +4,7 @@
 //! the grid's resolution (open ends come out closed).
 
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::outputs::Outputs;
 use super::{print_json, Context};
 use crate::bvh::MeshBvh;
 use crate::io::{write_mesh, MeshFormat};
@@ -53,6 +54,7 @@ struct RemeshOutput {
 
 pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
     MeshFormat::from_path(&args.output)?;
+    let mut outputs = Outputs::new(&[&args.output], &[])?;
     // Marching cubes reads φ only next to its zero level set: the narrow band is enough.
     let Voxelized {
         mesh,
@@ -73,12 +75,12 @@ pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
     } else {
         (extract_surface(&phi, &extract)?, 0)
     };
-    if cavities_joined > 0 && !ctx.quiet {
+    if cavities_joined > 0 {
         bar.suspend(|| {
-            eprintln!(
-                "note: reopened {cavities_joined} fold(s) of the input that closed into an enclosed \
+            ctx.notice(&format!(
+                "reopened {cavities_joined} fold(s) of the input that closed into an enclosed \
                  cavity at this voxel size"
-            )
+            ))
         });
     }
     let mc = t.elapsed().as_secs_f64();
@@ -103,7 +105,8 @@ pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
     let project = t.elapsed().as_secs_f64();
     let output = mesh_info(&surface);
     let t = Instant::now();
-    write_mesh(&args.output, &surface)?;
+    outputs.write(&args.output, |p| write_mesh(p, &surface))?;
+    outputs.commit()?;
     let write = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let out = RemeshOutput {

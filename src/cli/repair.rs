@@ -2,6 +2,7 @@
 //! damaged regions D of a vessel (paper Section 4, Algorithm 4; see [`crate::inpaint::repair`]),
 //! write the repaired watertight mesh, and report the inpainted volume and the stenosis per region.
 
+use super::outputs::Outputs;
 use super::{print_json, progress, Context};
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
@@ -17,7 +18,7 @@ use crate::report::repair_report::{
 };
 use anyhow::Context as _;
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Debug, clap::Args)]
@@ -143,6 +144,12 @@ struct Report {
 pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     MeshFormat::from_path(&args.output)?;
+    let targets: Vec<&Path> = std::iter::once(&args.output)
+        .chain(&args.report)
+        .chain(&args.picture)
+        .map(|p| &**p)
+        .collect();
+    let mut outputs = Outputs::new(&targets, &[])?;
     let method: InpaintMethod = args.method.parse()?;
     for (name, v) in [
         ("-c/--speed", args.speed),
@@ -317,23 +324,23 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
         info.leaks().join(", ")
     );
     let text = serde_json::to_string_pretty(&report)?;
-    write_mesh(&args.output, &result.mesh)?;
+    outputs.write(&args.output, |p| write_mesh(p, &result.mesh))?;
     if let Some(path) = &args.report {
-        write_atomic(path, |out| {
-            out.write_all(text.as_bytes())
-                .and_then(|_| out.write_all(b"\n"))
-                .map_err(|e| crate::Error::io(path, e))
+        outputs.write(path, |path| {
+            write_atomic(path, |out| {
+                out.write_all(text.as_bytes())
+                    .and_then(|_| out.write_all(b"\n"))
+                    .map_err(|e| crate::Error::io(path, e))
+            })
         })?;
     }
     if let Some(path) = &args.picture {
-        render_repair(
-            &result.closed_input,
-            &result.mesh,
-            &balls,
-            path,
-            &RepairPictureOptions::default(),
-        )?;
+        outputs.write(path, |p| {
+            let opts = RepairPictureOptions::default();
+            render_repair(&result.closed_input, &result.mesh, &balls, p, &opts)
+        })?;
     }
+    outputs.commit()?;
     bar.finish_and_clear();
     if !ctx.quiet {
         if let Some(why) = &result.fallback {
