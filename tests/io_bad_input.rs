@@ -501,12 +501,12 @@ fn an_existing_file_is_replaced_only_on_success() {
     });
     assert!(failed.is_err());
     assert_eq!(std::fs::read(&path).unwrap(), b"old contents");
-    // A mesh with an index out of range is refused before anything is written.
+    // A mesh with an index out of range is refused, naming the file, before anything is written.
     let mut bad = tetra_mesh();
     bad.faces.push([0, 1, 7]);
     let err = write_mesh(&path, &bad).unwrap_err();
     assert!(
-        matches!(&err, Error::InvalidMesh(m) if m.contains("vertex 7")),
+        matches!(&err, Error::Format { path: p, message } if p == &path && message.contains("vertex 7")),
         "{err:?}"
     );
     assert_eq!(std::fs::read(&path).unwrap(), b"old contents");

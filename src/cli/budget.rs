@@ -51,6 +51,28 @@ fn address_space_limit(text: &str) -> Option<u64> {
         .ok()
 }
 
+/// Most area samples per surface `--samples` takes (a billion would take hours).
+pub const MAX_SAMPLES: usize = 100_000_000;
+
+/// Bytes held per area sample of a surface distance: the point and its distance.
+const BYTES_PER_SAMPLE: u64 = 32;
+
+/// Refuses a sample count (of `flag`) above [`MAX_SAMPLES`] or whose two sample sets exceed the
+/// budget `max`.
+pub fn check_samples(flag: &str, samples: usize, max: u64) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        samples <= MAX_SAMPLES,
+        "{flag} {samples} is more than the {MAX_SAMPLES} samples per surface allowed"
+    );
+    let bytes = (samples as u64).saturating_mul(2 * BYTES_PER_SAMPLE);
+    check(
+        &format!("{flag} {samples}"),
+        bytes,
+        max,
+        "use fewer samples or ",
+    )
+}
+
 /// Refuses `what` when its estimate `bytes` exceeds `max`: "{what} needs about X, more than the Y
 /// memory limit: {advice}raise --max-memory".
 pub fn check(what: &str, bytes: u64, max: u64, advice: &str) -> anyhow::Result<()> {

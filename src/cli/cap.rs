@@ -6,6 +6,7 @@ use crate::io::{read_mesh, write_mesh, MeshFormat};
 use crate::mesh::cap::{cap_holes, CapOptions, CapReport};
 use crate::mesh::info::{mesh_info, MeshInfo};
 use crate::mesh::orient::orient_consistently;
+use crate::mesh::weld::weld_coincident;
 use anyhow::Context as _;
 use std::path::PathBuf;
 
@@ -49,7 +50,16 @@ pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
     let mut outputs = Outputs::new(&[&args.output], &[])?;
     let orient = !args.no_orient;
     let bar = progress::spinner(ctx.quiet, "capping boundary loops");
-    let mut mesh = read_mesh(&args.mesh)?;
+    let mesh = read_mesh(&args.mesh)?;
+    // A triangle soup (corners not shared) would be "capped" triangle by triangle into
+    // back-to-back pairs: weld it into the surface it describes, as an STL reader would.
+    let (mut mesh, merged) = weld_coincident(&mesh);
+    if merged > 0 {
+        ctx.notice(&format!(
+            "{}: {merged} vertices at the same position as another were merged",
+            args.mesh.display()
+        ));
+    }
     let input = mesh_info(&mesh);
     let inconsistent_faces_flipped = if orient {
         orient_consistently(&mut mesh)

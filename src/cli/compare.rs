@@ -30,6 +30,7 @@ struct CompareOutput {
 
 pub fn run(ctx: &Context, args: &CompareArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.samples >= 1, "--samples must be at least 1");
+    super::budget::check_samples("--samples", args.samples, ctx.max_memory)?;
     let bar = progress::spinner(ctx.quiet, "comparing surfaces");
     let a = read_mesh(&args.a)?;
     let b = read_mesh(&args.b)?;

@@ -17,6 +17,7 @@ use super::evolve::{pad_for_motion, MotionRoom, VelocityName};
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
 use super::outputs::Outputs;
 use super::{print_json, Context};
+use crate::grid::spec::grid_memory_bytes;
 use crate::io::write_mesh_with_scalars;
 use crate::mesh::distance::SurfaceDistanceOptions;
 use crate::motion::Velocity;
@@ -124,6 +125,9 @@ struct DecomposeOutput {
     timings: Timings,
 }
 
+/// f32 grids of the padded grid `decompose` holds at once: the motion's, φ_0 and φ_T.
+const DECOMPOSE_GRIDS: usize = 6;
+
 /// The name of a velocity on the command line.
 pub(super) fn velocity_name(v: VelocityName) -> String {
     v.to_possible_value()
@@ -150,6 +154,9 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
     let velocity = Velocity::from_name(&velocity_name(args.velocity), args.c)?;
     if args.measure_rebuilds == Some(0) {
         anyhow::bail!("--measure-rebuilds needs at least 1 sample per surface");
+    }
+    if let Some(samples) = args.measure_rebuilds {
+        super::budget::check_samples("--measure-rebuilds", samples, ctx.max_memory)?;
     }
     let mut opts = DecomposeOptions {
         levels: args.levels,
@@ -189,6 +196,23 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
         },
         &opts.flow,
         "decomposing",
+    )?;
+    // The motion's grids, φ_0 and φ_T beside them, and every level's with --measure-rebuilds.
+    let kept = if opts.keep_level_sets {
+        args.levels.saturating_add(1)
+    } else {
+        0
+    };
+    let held = DECOMPOSE_GRIDS.saturating_add(kept);
+    let [nx, ny, nz] = spec.dims;
+    super::budget::check(
+        &format!(
+            "{}: decomposing on a {nx}×{ny}×{nz} grid ({held} grids)",
+            args.mesh.display()
+        ),
+        grid_memory_bytes(spec.dims, held),
+        ctx.max_memory,
+        "use a coarser --voxel, fewer --levels, or ",
     )?;
 
     if !bar.is_hidden() {

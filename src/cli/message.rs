@@ -59,8 +59,9 @@ pub fn clean(text: &str) -> String {
     out
 }
 
-/// Rewrites every decimal number with a fraction and more than [`DIGITS`] significant digits
-/// (e.g. `0.30000000000000004`, `1.2345678901234567e300`) with 6 significant digits. A number
+/// Rewrites every decimal number with a fraction or exponent and more than [`DIGITS`]
+/// significant digits (e.g. `0.30000000000000004`, `1.2345678901234567e300`), and every integer
+/// of more than 20 digits (`1e300` printed in full), with 6 significant digits. A number
 /// that is part of a word or a file name (next to a letter, `_`, `/` or another `.`) is left
 /// as it is.
 fn shorten_numbers(text: &str) -> String {
@@ -80,7 +81,13 @@ fn shorten_numbers(text: &str) -> String {
         let attached = bytes
             .get(end)
             .is_some_and(|&b| is_word_byte(b) || b == b'.');
-        if !attached && token.contains('.') && significant_digits(token) > DIGITS {
+        // An integer of more than 20 digits is no count or index (u64 has 20): a float's digits.
+        let long = if token.contains(['.', 'e', 'E']) {
+            significant_digits(token) > DIGITS
+        } else {
+            token.len() > 20
+        };
+        if !attached && long {
             if let Ok(v) = token.parse::<f64>() {
                 out.push_str(&text[copied..i]);
                 out.push_str(&short_number(v));
@@ -167,6 +174,11 @@ mod tests {
         );
         assert_eq!(clean("v1.2345678901.stl: bad"), "v1.2345678901.stl: bad");
         assert_eq!(clean("12345678901 bytes"), "12345678901 bytes");
+        assert_eq!(
+            clean("18446744073709551615 samples"),
+            "18446744073709551615 samples"
+        );
+        assert_eq!(clean(&format!("got {}", 1e300)), "got 1.00000e300");
     }
 
     #[test]

@@ -17,8 +17,10 @@ mod phantom;
 mod profile;
 mod progress;
 mod reconstruct;
+mod region_limits;
 mod remesh;
 mod repair;
+mod repair_budget;
 mod stenosis;
 mod voxelize;
 

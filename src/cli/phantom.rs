@@ -57,9 +57,10 @@ pub fn run(ctx: &Context, args: &PhantomArgs) -> anyhow::Result<()> {
         ..Default::default()
     };
     if let Some(r) = args.radius {
+        // Far beyond this the phantom's coordinates, areas and volumes overflow.
         anyhow::ensure!(
-            r.is_finite() && r > 0.0,
-            "--radius must be a positive length, got {r}"
+            (1e-30..=1e30).contains(&r),
+            "--radius must be a length from 1e-30 to 1e30, got {r}"
         );
         opts.radius = r;
     }

@@ -22,7 +22,7 @@ use crate::io::{write_mesh, MeshFormat};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::mesh::distance::{surface_distance, SurfaceDistanceOptions};
 use crate::mesh::info::{mesh_info, MeshInfo};
-use crate::msr::archive::read_msr;
+use crate::msr::archive::read_msr_within;
 use crate::msr::reconstruct::{rebuild_from_tangent_planes, AdvectOptions};
 use indicatif::ProgressStyle;
 use rayon::prelude::*;
@@ -86,7 +86,7 @@ struct ReconstructOutput {
 pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
     MeshFormat::from_path(&args.output)?;
     let mut outputs = Outputs::new(&[&args.output], &[])?;
-    let msr = read_msr(&args.archive)?;
+    let msr = read_msr_within(&args.archive, ctx.max_memory)?;
     let n = msr.levels();
     let k = args.level;
     anyhow::ensure!(

@@ -3,12 +3,14 @@
 //! write the repaired watertight mesh, and report the inpainted volume and the stenosis per region.
 
 use super::outputs::Outputs;
+use super::region_limits::check_regions;
+use super::repair_budget;
 use super::{print_json, progress, Context};
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
 use crate::centerline::{compute_centerline, CenterlineOptions};
 use crate::inpaint::holes::{hole_regions, LoopKind, LoopOptions};
-use crate::inpaint::region::{parse_ball, read_regions, validate_regions, Ball};
+use crate::inpaint::region::{parse_ball, read_regions, Ball};
 use crate::inpaint::repair::{repair, InpaintMethod, RepairOptions};
 use crate::io::{read_mesh, write_atomic, write_mesh, MeshFormat};
 use crate::mesh::info::mesh_info;
@@ -194,12 +196,10 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
             &StenosisFindOptions::default(),
         )),
         Err(e) => {
-            if !ctx.quiet {
-                eprintln!(
-                    "vesselmsr: notice: {}: no centreline ({e}); regions are sized and measured without it",
-                    args.mesh.display()
-                );
-            }
+            ctx.notice(&format!(
+                "{}: no centreline ({e}); regions are sized and measured without it",
+                args.mesh.display()
+            ));
             None
         }
     };
@@ -216,11 +216,11 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
             .as_ref()
             .map(|h| h.lesion_regions(p))
             .unwrap_or_default();
-        if found.is_empty() && !ctx.quiet {
-            eprintln!(
-                "vesselmsr: notice: {}: no narrowing of {p}% or more found",
+        if found.is_empty() {
+            ctx.notice(&format!(
+                "{}: no narrowing of {p}% or more found",
                 args.mesh.display()
-            );
+            ));
         }
         for b in found {
             balls.push(b);
@@ -248,7 +248,8 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
             })
             .collect();
     }
-    validate_regions(&mesh, &balls).with_context(|| format!("{}", args.mesh.display()))?;
+    let mesh_name = args.mesh.display().to_string();
+    check_regions(ctx, &mesh, &mesh_name, &mut balls, &mut sources)?;
     let opts = RepairOptions {
         method,
         voxel: args.voxel,
@@ -262,6 +263,8 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
             .unwrap_or(RepairOptions::default().max_iterations),
         ..RepairOptions::default()
     };
+    repair_budget::check(&mesh, &balls, &opts, ctx.max_memory)
+        .with_context(|| mesh_name.clone())?;
     let bar = progress::spinner(ctx.quiet, "repairing");
     let result = repair(&mesh, &balls, &opts)
         .with_context(|| format!("{}: repair failed", args.mesh.display()))?;
@@ -342,12 +345,10 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
     }
     outputs.commit()?;
     bar.finish_and_clear();
-    if !ctx.quiet {
-        if let Some(why) = &result.fallback {
-            eprintln!(
-                "vesselmsr: notice: the patch could not be stitched into the kept triangles ({why}); the whole vessel was re-meshed"
-            );
-        }
+    if let Some(why) = &result.fallback {
+        ctx.notice(&format!(
+            "the patch could not be stitched into the kept triangles ({why}); the whole vessel was re-meshed"
+        ));
     }
     if ctx.json {
         return print_json(&report);

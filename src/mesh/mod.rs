@@ -1,7 +1,7 @@
 //! The triangle mesh and what is measured or repaired on it without a level set: topology
 //! (components, boundary loops, manifoldness, orientation), measures (area, enclosed volume by the
 //! divergence theorem, bounding box, edge length, genus), the `info` summary, capping of open
-//! vessel ends, and surface-to-surface distances for `compare`.
+//! vessel ends, welding of coincident vertices, and surface-to-surface distances for `compare`.
 
 pub mod cap;
 pub mod distance;
@@ -11,5 +11,6 @@ pub mod orient;
 pub mod primitives;
 pub mod topology;
 mod trimesh;
+pub mod weld;
 
 pub use trimesh::TriMesh;
