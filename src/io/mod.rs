@@ -6,8 +6,9 @@
 //! `.vtk` POLYDATA in the encodings VTK writes (`vtp`, `vtk_legacy`: polygons fan-triangulated,
 //! triangle strips cut, lines and vertices ignored). Every mesh
 //! read is validated: finite coordinates, at least one triangle, indices in range, and at least one
-//! non-degenerate triangle; every mesh written passes the same checks (and float32 range for STL). Every error names the file and the problem in one line. Writers go
-//! through [`write_atomic`], so a failed write leaves no partial file.
+//! non-degenerate triangle; every mesh written passes the same checks (and the float32 range for
+//! STL). Every error names the file and the problem in one line. Writers go through
+//! [`write_atomic`], so a failed write leaves no partial file.
 //!
 //! Grids (level-set functions) are written as NumPy `.npy` with a JSON sidecar (`npy`), as
 //! VTK ImageData `.vti` (`vti`, for ParaView) and as NRRD (`nrrd`, for 3D Slicer and ITK).
@@ -87,15 +88,20 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 pub fn read_mesh(path: &Path) -> Result<TriMesh> {
     let format = MeshFormat::from_path(path)?;
     let bytes = read_bytes(path)?;
+    parse_mesh(&bytes, format).map_err(|m| Error::format(path, m))
+}
+
+/// Parses and validates the bytes of a mesh file of `format` (what [`read_mesh`] does after
+/// reading the file; the fuzz targets call it on arbitrary bytes). The error is one line.
+pub fn parse_mesh(bytes: &[u8], format: MeshFormat) -> std::result::Result<TriMesh, String> {
     let mesh = match format {
-        MeshFormat::Stl => stl::read(&bytes),
-        MeshFormat::Obj => obj::read(&bytes),
-        MeshFormat::Ply => ply::read(&bytes).map(|p| p.mesh),
-        MeshFormat::Vtp => vtp::parse_vtp(&bytes).and_then(|d| d.to_mesh()),
-        MeshFormat::Vtk => vtk_legacy::parse_vtk_legacy(&bytes).and_then(|d| d.to_mesh()),
-    }
-    .map_err(|m| Error::format(path, m))?;
-    validate::validate_mesh(&mesh).map_err(|m| Error::format(path, m))?;
+        MeshFormat::Stl => stl::read(bytes),
+        MeshFormat::Obj => obj::read(bytes),
+        MeshFormat::Ply => ply::read(bytes).map(|p| p.mesh),
+        MeshFormat::Vtp => vtp::parse_vtp(bytes).and_then(|d| d.to_mesh()),
+        MeshFormat::Vtk => vtk_legacy::parse_vtk_legacy(bytes).and_then(|d| d.to_mesh()),
+    }?;
+    validate::validate_mesh(&mesh)?;
     Ok(mesh)
 }
 
