@@ -7,7 +7,6 @@ use common::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use vesselmsr::io::write_mesh;
-use vesselmsr::TriMesh;
 
 /// The address-space limit, KiB (2 GiB).
 const LIMIT_KIB: u64 = 2 << 20;
@@ -36,16 +35,7 @@ fn mesh_corpus(dir: &Path) -> Vec<PathBuf> {
     write_mesh(&path, &huge).unwrap();
     files.push(path);
     let closed = odd_octahedron();
-    let soup = TriMesh::new(
-        closed
-            .faces
-            .iter()
-            .flat_map(|f| f.map(|v| closed.vertices[v as usize]))
-            .collect(),
-        (0..closed.num_faces() as u32)
-            .map(|f| [3 * f, 3 * f + 1, 3 * f + 2])
-            .collect(),
-    );
+    let soup = soup_of(&closed);
     let path = dir.join("soup.obj");
     write_mesh(&path, &soup).unwrap();
     files.push(path);

@@ -8,20 +8,9 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 use vesselmsr::io::{read_npz, write_mesh, write_npz, NpyArray};
-use vesselmsr::TriMesh;
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
-}
-
-/// Files in `dir` (names), sorted; hidden staging folders included.
-fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 /// Asserts a clean refusal: exit 2, one error line of at most 300 characters (after the
@@ -60,6 +49,14 @@ fn phantom(dir: &Path) -> (PathBuf, PathBuf) {
     ]);
     assert!(out.status.success(), "{out:?}");
     (mesh, regions)
+}
+
+/// `decompose MESH -o ARCHIVE` on a coarse grid, one level, with `more` flags.
+fn decompose_small(mesh: &Path, archive: &Path, more: &[&str]) -> Output {
+    let mut args = vec!["decompose", s(mesh), "-o", s(archive), "--resolution", "24"];
+    args.extend(["--levels", "1"]);
+    args.extend(more);
+    vesselmsr(&args)
 }
 
 /// A zip archive with one member `name` holding `bytes`.
@@ -144,16 +141,7 @@ fn archives_with_impossible_parameters_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let (mesh, _) = phantom(dir.path());
     let archive = dir.path().join("msr.npz");
-    let out = vesselmsr(&[
-        "decompose",
-        s(&mesh),
-        "-o",
-        s(&archive),
-        "--resolution",
-        "24",
-        "--levels",
-        "1",
-    ]);
+    let out = decompose_small(&mesh, &archive, &[]);
     assert!(out.status.success(), "{out:?}");
     let members = read_npz(&archive).unwrap();
     for (field, value, word) in [
@@ -264,16 +252,7 @@ fn meshes_beyond_float32_range_are_never_written() {
 fn capping_a_triangle_soup_gives_the_surface_it_describes() {
     let dir = tempfile::tempdir().unwrap();
     let closed = odd_octahedron();
-    let soup = TriMesh::new(
-        closed
-            .faces
-            .iter()
-            .flat_map(|f| f.map(|v| closed.vertices[v as usize]))
-            .collect(),
-        (0..closed.num_faces() as u32)
-            .map(|f| [3 * f, 3 * f + 1, 3 * f + 2])
-            .collect(),
-    );
+    let soup = soup_of(&closed);
     let input = dir.path().join("soup.obj");
     write_mesh(&input, &soup).unwrap();
     let output = dir.path().join("capped.stl");
@@ -379,18 +358,7 @@ fn a_failing_output_leaves_no_other_output() {
     ]);
     assert_refused(&out, "/nonexistent/r.json");
     let archive = dir.path().join("msr.npz");
-    let out = vesselmsr(&[
-        "decompose",
-        s(&mesh),
-        "-o",
-        s(&archive),
-        "--resolution",
-        "24",
-        "--levels",
-        "1",
-        "--figures",
-        "/proc/version",
-    ]);
+    let out = decompose_small(&mesh, &archive, &["--figures", "/proc/version"]);
     assert_refused(&out, "/proc/version");
     assert_eq!(listing(dir.path()), before);
     // Success commits the grid and its sidecar together and leaves no staging folder.

@@ -30,16 +30,6 @@ fn read_error(dir: &Path, name: &str, bytes: &[u8], words: &[&str]) {
     assert_format_error(read_mesh(&path), &path, words);
 }
 
-/// Files left in `dir`, sorted.
-fn listing(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
 /// Binary STL with a zeroed header declaring `n_declared` triangles.
 fn zero_header_stl(n_declared: u32, triangles: &[[[f32; 3]; 3]]) -> Vec<u8> {
     binary_stl(&[0; 80], n_declared, triangles)

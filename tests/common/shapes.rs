@@ -1,5 +1,6 @@
 //! Test shapes built on `vesselmsr::mesh::primitives`: the cube [lo, hi]³, whole or with one
-//! side left open; an octahedron with coordinates f32 cannot hold (for the formats' exactness).
+//! side left open; an octahedron with coordinates f32 cannot hold (for the formats' exactness);
+//! any mesh as a triangle soup.
 
 use nalgebra::Point3;
 use vesselmsr::mesh::primitives::box_mesh;
@@ -46,4 +47,17 @@ pub fn odd_octahedron() -> TriMesh {
         [5, 0, 2],
     ];
     TriMesh::new(vertices, faces)
+}
+
+/// `mesh` as a triangle soup: every triangle with its own three corners (no vertex shared).
+pub fn soup_of(mesh: &TriMesh) -> TriMesh {
+    TriMesh::new(
+        mesh.faces
+            .iter()
+            .flat_map(|f| f.map(|v| mesh.vertices[v as usize]))
+            .collect(),
+        (0..mesh.num_faces() as u32)
+            .map(|f| [3 * f, 3 * f + 1, 3 * f + 2])
+            .collect(),
+    )
 }
