@@ -30,16 +30,6 @@ fn read_error(dir: &Path, name: &str, bytes: &[u8], words: &[&str]) {
     assert_format_error(read_mesh(&path), &path, words);
 }
 
-/// Files left in `dir`, sorted.
-fn listing(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
 /// Binary STL with a zeroed header declaring `n_declared` triangles.
 fn zero_header_stl(n_declared: u32, triangles: &[[[f32; 3]; 3]]) -> Vec<u8> {
     binary_stl(&[0; 80], n_declared, triangles)
@@ -501,12 +491,12 @@ fn an_existing_file_is_replaced_only_on_success() {
     });
     assert!(failed.is_err());
     assert_eq!(std::fs::read(&path).unwrap(), b"old contents");
-    // A mesh with an index out of range is refused before anything is written.
+    // A mesh with an index out of range is refused, naming the file, before anything is written.
     let mut bad = tetra_mesh();
     bad.faces.push([0, 1, 7]);
     let err = write_mesh(&path, &bad).unwrap_err();
     assert!(
-        matches!(&err, Error::InvalidMesh(m) if m.contains("vertex 7")),
+        matches!(&err, Error::Format { path: p, message } if p == &path && message.contains("vertex 7")),
         "{err:?}"
     );
     assert_eq!(std::fs::read(&path).unwrap(), b"old contents");

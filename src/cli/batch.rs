@@ -146,7 +146,7 @@ pub fn run(ctx: &Context, args: &BatchArgs) -> anyhow::Result<()> {
             let Some(&k) = todo.get(next.fetch_add(1, Ordering::SeqCst)) else {
                 return Ok(());
             };
-            let row = run_one(&jobs[k], args, ext.as_deref());
+            let row = run_one(&jobs[k], args, ext.as_deref(), ctx.max_memory);
             let n = finished.fetch_add(1, Ordering::SeqCst) + 1;
             if !ctx.quiet {
                 eprintln!(
@@ -320,7 +320,7 @@ fn write_summaries(dir: &Path, rows: &[Option<Row>]) -> anyhow::Result<()> {
 }
 
 /// Runs the command on one mesh; any error, or a panic, becomes an error row (without figures).
-fn run_one(job: &Job, args: &BatchArgs, ext: Option<&str>) -> Row {
+fn run_one(job: &Job, args: &BatchArgs, ext: Option<&str>, max_memory: u64) -> Row {
     let start = Instant::now();
     let base = Row {
         id: job.id.clone(),
@@ -330,7 +330,7 @@ fn run_one(job: &Job, args: &BatchArgs, ext: Option<&str>) -> Row {
     };
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let mut row = base.clone();
-        run_command(job, args, ext, &mut row).map(|()| row)
+        run_command(job, args, ext, max_memory, &mut row).map(|()| row)
     }));
     let failed = |error: String| Row {
         status: "error".into(),
@@ -342,7 +342,7 @@ fn run_one(job: &Job, args: &BatchArgs, ext: Option<&str>) -> Row {
             status: "ok".into(),
             ..row
         },
-        Ok(Err(e)) => failed(super::one_line(&e)),
+        Ok(Err(e)) => failed(super::message::error_line(&e)),
         Err(panic) => failed(format!(
             "internal error: {}",
             panic
@@ -364,6 +364,7 @@ fn run_command(
     job: &Job,
     args: &BatchArgs,
     ext: Option<&str>,
+    max_memory: u64,
     row: &mut Row,
 ) -> anyhow::Result<()> {
     let ext = match ext {
@@ -400,6 +401,7 @@ fn run_command(
     let ctx = Context {
         quiet: true,
         json: false,
+        max_memory,
     };
     let f = |v: &Value| v.as_f64();
     match cli.command {

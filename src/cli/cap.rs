@@ -1,10 +1,12 @@
 //! `vesselmsr cap MESH -o OUT`: close every boundary loop and write a watertight, outward mesh.
 
+use super::outputs::Outputs;
 use super::{print_json, progress, Context};
 use crate::io::{read_mesh, write_mesh, MeshFormat};
 use crate::mesh::cap::{cap_holes, CapOptions, CapReport};
 use crate::mesh::info::{mesh_info, MeshInfo};
 use crate::mesh::orient::orient_consistently;
+use crate::mesh::weld::weld_coincident;
 use anyhow::Context as _;
 use std::path::PathBuf;
 
@@ -43,11 +45,21 @@ pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
             "--target-edge must be a positive length, got {l}"
         );
     }
-    // Refuse an unwritable output format before any work is done.
+    // Refuse an unwritable output format or folder before any work is done.
     MeshFormat::from_path(&args.output)?;
+    let mut outputs = Outputs::new(&[&args.output], &[])?;
     let orient = !args.no_orient;
     let bar = progress::spinner(ctx.quiet, "capping boundary loops");
-    let mut mesh = read_mesh(&args.mesh)?;
+    let mesh = read_mesh(&args.mesh)?;
+    // A triangle soup (corners not shared) would be "capped" triangle by triangle into
+    // back-to-back pairs: weld it into the surface it describes, as an STL reader would.
+    let (mut mesh, merged) = weld_coincident(&mesh);
+    if merged > 0 {
+        ctx.notice(&format!(
+            "{}: {merged} vertices at the same position as another were merged",
+            args.mesh.display()
+        ));
+    }
     let input = mesh_info(&mesh);
     let inconsistent_faces_flipped = if orient {
         orient_consistently(&mut mesh)
@@ -72,17 +84,16 @@ pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
             input.leaks().join(", ")
         );
     }
-    write_mesh(&args.output, &capped)?;
+    outputs.write(&args.output, |p| write_mesh(p, &capped))?;
+    outputs.commit()?;
     bar.finish_and_clear();
-    if !ctx.quiet {
-        for m in &report.messages {
-            eprintln!("vesselmsr: notice: {m}");
-        }
-        if inconsistent_faces_flipped > 0 {
-            eprintln!(
-                "vesselmsr: notice: {inconsistent_faces_flipped} triangles were wound against their neighbours and were flipped"
-            );
-        }
+    for m in &report.messages {
+        ctx.notice(m);
+    }
+    if inconsistent_faces_flipped > 0 {
+        ctx.notice(&format!(
+            "{inconsistent_faces_flipped} triangles were wound against their neighbours and were flipped"
+        ));
     }
     if ctx.json {
         return print_json(&CapOutput {

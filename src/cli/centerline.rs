@@ -3,6 +3,7 @@
 //! (one polyline per branch, for ParaView and 3D Slicer).
 
 use super::grid_args::GridArgs;
+use super::outputs::Outputs;
 use super::{print_json, progress, Context};
 use crate::centerline::extract::CenterlineTimings;
 use crate::centerline::{compute_centerline, Centerline, CenterlineOptions};
@@ -105,7 +106,7 @@ pub fn centerline_for(
     match &src.centerline {
         Some(path) => Ok((read_mesh(&src.mesh)?, read_centerline_json(path)?)),
         None => {
-            let (mesh, cl, _, _) = load_centerline(&src.mesh, &src.grid)?;
+            let (mesh, cl, _, _) = load_centerline(ctx, &src.mesh, &src.grid)?;
             print_notices(ctx, &src.mesh, &cl);
             Ok((mesh, cl))
         }
@@ -114,6 +115,7 @@ pub fn centerline_for(
 
 /// Reads a mesh and computes its centreline with the grid flags, errors naming the file.
 pub fn load_centerline(
+    ctx: &Context,
     mesh_path: &Path,
     grid: &GridArgs,
 ) -> anyhow::Result<(TriMesh, Centerline, CenterlineTimings, f64)> {
@@ -121,7 +123,7 @@ pub fn load_centerline(
     let mesh = read_mesh(mesh_path)?;
     let read_s = t.elapsed().as_secs_f64();
     let opts = CenterlineOptions {
-        grid: grid.options()?,
+        grid: grid.options(ctx),
         ..CenterlineOptions::default()
     };
     let (cl, timings) =
@@ -131,18 +133,23 @@ pub fn load_centerline(
 
 /// Prints the centreline's notices on stderr (unless quiet).
 pub fn print_notices(ctx: &Context, mesh_path: &Path, cl: &Centerline) {
-    if !ctx.quiet {
-        for n in &cl.notices {
-            eprintln!("vesselmsr: notice: {}: {n}", mesh_path.display());
-        }
+    for n in &cl.notices {
+        ctx.notice(&format!("{}: {n}", mesh_path.display()));
     }
 }
 
 pub fn run(ctx: &Context, args: &CenterlineArgs) -> anyhow::Result<()> {
     let start = Instant::now();
     let format = args.output.as_deref().map(output_format).transpose()?;
+    let targets: Vec<&Path> = args
+        .output
+        .iter()
+        .chain(&args.picture)
+        .map(|p| &**p)
+        .collect();
+    let mut outputs = Outputs::new(&targets, &[])?;
     let bar = progress::spinner(ctx.quiet, "tracing the centreline");
-    let (mesh, cl, steps, read_s) = load_centerline(&args.mesh, &args.grid)?;
+    let (mesh, cl, steps, read_s) = load_centerline(ctx, &args.mesh, &args.grid)?;
     let picture = match &args.picture {
         Some(_) => Some(centerline_picture(&mesh, &cl, (480, 480))?),
         None => None,
@@ -151,14 +158,15 @@ pub fn run(ctx: &Context, args: &CenterlineArgs) -> anyhow::Result<()> {
     print_notices(ctx, &args.mesh, &cl);
     let t = Instant::now();
     if let (Some(path), Some(format)) = (&args.output, format) {
-        match format {
-            Format::Json => write_centerline_json(path, &cl)?,
-            Format::Vtp => write_centerline_vtp(path, &cl)?,
-        }
+        outputs.write(path, |p| match format {
+            Format::Json => write_centerline_json(p, &cl),
+            Format::Vtp => write_centerline_vtp(p, &cl),
+        })?;
     }
     if let (Some(path), Some(image)) = (&args.picture, &picture) {
-        write_png(path, image)?;
+        outputs.write(path, |p| write_png(p, image))?;
     }
+    outputs.commit()?;
     let write_s = t.elapsed().as_secs_f64();
     let summary = Summary {
         mesh: &args.mesh,

@@ -30,14 +30,13 @@ struct CompareOutput {
 
 pub fn run(ctx: &Context, args: &CompareArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.samples >= 1, "--samples must be at least 1");
+    super::budget::check_samples("--samples", args.samples, ctx.max_memory)?;
     let bar = progress::spinner(ctx.quiet, "comparing surfaces");
     let a = read_mesh(&args.a)?;
     let b = read_mesh(&args.b)?;
     let (info_a, info_b) = (mesh_info(&a), mesh_info(&b));
-    if !ctx.quiet {
-        if let Some(note) = units_notice(&info_a, &info_b) {
-            eprintln!("vesselmsr: notice: {note}");
-        }
+    if let Some(note) = units_notice(&info_a, &info_b) {
+        ctx.notice(&note);
     }
     let distance = surface_distance(
         &a,

@@ -15,7 +15,9 @@
 
 use super::evolve::{pad_for_motion, MotionRoom, VelocityName};
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::outputs::Outputs;
 use super::{print_json, Context};
+use crate::grid::spec::grid_memory_bytes;
 use crate::io::write_mesh_with_scalars;
 use crate::mesh::distance::SurfaceDistanceOptions;
 use crate::motion::Velocity;
@@ -27,10 +29,9 @@ use crate::report::{
     StripOptions,
 };
 use crate::TriMesh;
-use anyhow::Context as _;
 use clap::ValueEnum;
 use indicatif::ProgressStyle;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Debug, clap::Args)]
@@ -129,6 +130,9 @@ struct DecomposeOutput {
     timings: Timings,
 }
 
+/// f32 grids of the padded grid `decompose` holds at once: the motion's, φ_0 and φ_T.
+const DECOMPOSE_GRIDS: usize = 6;
+
 /// The name of a velocity on the command line.
 pub(super) fn velocity_name(v: VelocityName) -> String {
     v.to_possible_value()
@@ -151,9 +155,19 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
         "--levels-format must be ply, vtp or vtk, got {:?}",
         args.levels_format
     );
+    let dirs: Vec<&Path> = args
+        .levels_dir
+        .iter()
+        .chain(&args.figures)
+        .map(|p| &**p)
+        .collect();
+    let mut outputs = Outputs::new(&[&args.output], &dirs)?;
     let velocity = Velocity::from_name(&velocity_name(args.velocity), args.c)?;
     if args.measure_rebuilds == Some(0) {
         anyhow::bail!("--measure-rebuilds needs at least 1 sample per surface");
+    }
+    if let Some(samples) = args.measure_rebuilds {
+        super::budget::check_samples("--measure-rebuilds", samples, ctx.max_memory)?;
     }
     let mut opts = DecomposeOptions {
         levels: args.levels,
@@ -167,7 +181,7 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
     if args.levels == 0 {
         level_schedule(&opts, 1.0).map_err(|e| anyhow::anyhow!("{}: {e}", args.mesh.display()))?;
     }
-    let grid_opts = args.grid.options()?;
+    let grid_opts = args.grid.options(ctx);
     let Voxelized {
         mesh,
         mut spec,
@@ -193,6 +207,23 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
         },
         &opts.flow,
         "decomposing",
+    )?;
+    // The motion's grids, φ_0 and φ_T beside them, and every level's with --measure-rebuilds.
+    let kept = if opts.keep_level_sets {
+        args.levels.saturating_add(1)
+    } else {
+        0
+    };
+    let held = DECOMPOSE_GRIDS.saturating_add(kept);
+    let [nx, ny, nz] = spec.dims;
+    super::budget::check(
+        &format!(
+            "{}: decomposing on a {nx}×{ny}×{nz} grid ({held} grids)",
+            args.mesh.display()
+        ),
+        grid_memory_bytes(spec.dims, held),
+        ctx.max_memory,
+        "use a coarser --voxel, fewer --levels, or ",
     )?;
 
     if !bar.is_hidden() {
@@ -249,9 +280,9 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
     let t = Instant::now();
     bar.set_message("writing");
     let mut files = Vec::new();
-    write_msr(&args.output, msr)?;
+    outputs.write(&args.output, |p| write_msr(p, msr))?;
     if let Some(dir) = &args.levels_dir {
-        std::fs::create_dir_all(dir).with_context(|| format!("{}", dir.display()))?;
+        outputs.create_dir(dir)?;
         for (k, scale) in scales.iter().enumerate() {
             let path = dir.join(format!("level_{k}.{levels_ext}"));
             let detail: Vec<f32>;
@@ -261,21 +292,22 @@ pub fn run(ctx: &Context, args: &DecomposeArgs) -> anyhow::Result<()> {
                 detail = vertex_details[k - 1].iter().map(|&w| w as f32).collect();
                 vec![("detail", &detail[..])]
             };
-            write_mesh_with_scalars(&path, scale, &scalars)?;
+            outputs.write(&path, |p| write_mesh_with_scalars(p, scale, &scalars))?;
             files.push(path.display().to_string());
         }
     }
     if let (Some(dir), Some((histograms, strip))) = (&args.figures, &figures) {
-        std::fs::create_dir_all(dir).with_context(|| format!("{}", dir.display()))?;
+        outputs.create_dir(dir)?;
         for (name, image) in [
             ("details_histograms.png", histograms),
             ("levels_strip.png", strip),
         ] {
             let path = dir.join(name);
-            write_png(&path, image)?;
+            outputs.write(&path, |p| write_png(p, image))?;
             files.push(path.display().to_string());
         }
     }
+    outputs.commit()?;
     let write_s = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
 

@@ -11,6 +11,7 @@
 //! the shape vanishes before T).
 
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::outputs::Outputs;
 use super::{print_json, Context};
 use crate::grid::spec::{format_bytes, grid_memory_bytes, GridOptions};
 use crate::grid::{Grid3, GridSpec};
@@ -160,6 +161,7 @@ pub(super) fn pad_for_motion(
 
 pub fn run(ctx: &Context, args: &EvolveArgs) -> anyhow::Result<()> {
     MeshFormat::from_path(&args.output)?;
+    let mut outputs = Outputs::new(&[&args.output], &[])?;
     let name = match args.velocity {
         VelocityName::Mcf => "mcf",
         VelocityName::Vpmcf => "vpmcf",
@@ -170,7 +172,7 @@ pub fn run(ctx: &Context, args: &EvolveArgs) -> anyhow::Result<()> {
     // T and DT are checked before any work (DT's default needs the voxel size).
     step_count(args.time, args.dt.unwrap_or(args.time))
         .map_err(|e| anyhow::anyhow!("--time/--dt: {e}"))?;
-    let grid_opts = args.grid.options()?;
+    let grid_opts = args.grid.options(ctx);
     let Voxelized {
         mut spec,
         mut phi,
@@ -224,7 +226,8 @@ pub fn run(ctx: &Context, args: &EvolveArgs) -> anyhow::Result<()> {
     let mc = t.elapsed().as_secs_f64();
     let output = mesh_info(&surface);
     let t = Instant::now();
-    write_mesh(&args.output, &surface)?;
+    outputs.write(&args.output, |p| write_mesh(p, &surface))?;
+    outputs.commit()?;
     let write = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
 

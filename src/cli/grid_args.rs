@@ -1,9 +1,9 @@
 //! The grid flags shared by the level-set commands (`voxelize`, `remesh`): voxel size or
-//! resolution, and the memory limit; and the first steps both commands take with them (read the
-//! mesh, size its grid, voxelize it).
+//! resolution (the memory limit is the global `--max-memory`, see `budget`); and the first steps
+//! both commands take with them (read the mesh, size its grid, voxelize it).
 
 use super::{progress, Context};
-use crate::grid::spec::{parse_memory_size, GridOptions, DEFAULT_MAX_MEMORY_BYTES};
+use crate::grid::spec::GridOptions;
 use crate::grid::{grid_for_mesh, Grid3, GridSpec};
 use crate::io::read_mesh;
 use crate::levelset::voxelize::{voxelize_with_report, VoxelizeOptions, VoxelizeReport};
@@ -21,24 +21,17 @@ pub struct GridArgs {
     /// Cells along the longest axis of the mesh's bounding box (instead of --voxel).
     #[arg(long, value_name = "N")]
     pub resolution: Option<usize>,
-    /// Refuse grids whose memory estimate exceeds this (e.g. 8G, 512M, bytes).
-    #[arg(long, value_name = "SIZE")]
-    pub max_memory: Option<String>,
 }
 
 impl GridArgs {
-    /// The grid options these flags ask for.
-    pub fn options(&self) -> anyhow::Result<GridOptions> {
-        let max_memory_bytes = match &self.max_memory {
-            Some(text) => parse_memory_size(text)?,
-            None => DEFAULT_MAX_MEMORY_BYTES,
-        };
-        Ok(GridOptions {
+    /// The grid options these flags ask for, within the memory budget of `ctx`.
+    pub fn options(&self, ctx: &Context) -> GridOptions {
+        GridOptions {
             voxel: self.voxel,
             resolution: self.resolution,
-            max_memory_bytes,
+            max_memory_bytes: ctx.max_memory,
             ..GridOptions::default()
-        })
+        }
     }
 }
 
@@ -82,7 +75,7 @@ pub fn load_and_voxelize(
     mesh_path: &Path,
     grid: &GridArgs,
 ) -> anyhow::Result<Voxelized> {
-    let grid_opts = grid.options()?;
+    let grid_opts = grid.options(ctx);
     let t = Instant::now();
     let mesh = read_mesh(mesh_path)?;
     let read_s = t.elapsed().as_secs_f64();

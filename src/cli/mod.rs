@@ -1,8 +1,10 @@
 //! The `vesselmsr` command-line interface: argument parsing (clap), the global flags (`--quiet`,
-//! `--threads`, `--json`), and one file per command. Errors are printed as one line on stderr with
-//! exit status 2; outputs are only written when the whole command succeeded.
+//! `--threads`, `--json`, `--max-memory`), and one file per command. Errors are printed as one
+//! line on stderr with exit status 2 (`message`); outputs are only written when the whole command
+//! succeeded (`outputs`); the memory budget is `budget`.
 
 mod batch;
+mod budget;
 mod cap;
 mod centerline;
 mod compare;
@@ -10,12 +12,16 @@ mod decompose;
 mod evolve;
 mod grid_args;
 mod info;
+mod message;
+mod outputs;
 mod phantom;
 mod profile;
 mod progress;
 mod reconstruct;
+mod region_limits;
 mod remesh;
 mod repair;
+mod repair_budget;
 mod stenosis;
 mod voxelize;
 
@@ -29,9 +35,13 @@ pub struct Cli {
     /// No progress bars and no notices on stderr (errors are still printed).
     #[arg(long, short, global = true)]
     pub quiet: bool,
-    /// Worker threads for parallel work (default: one per core).
+    /// Worker threads for parallel work (default: one per core; at most 4 per core).
     #[arg(long, global = true, value_name = "N")]
     pub threads: Option<usize>,
+    /// Refuse work whose memory estimate (grids, sample sets, archive members) exceeds this,
+    /// e.g. 8G, 512M, bytes (default: half the machine's memory, within the address-space limit).
+    #[arg(long, global = true, value_name = "SIZE")]
+    pub max_memory: Option<String>,
     /// Print results as JSON on stdout instead of text.
     #[arg(long, global = true)]
     pub json: bool,
@@ -90,37 +100,63 @@ pub enum Command {
 pub struct Context {
     pub quiet: bool,
     pub json: bool,
+    /// The memory budget, bytes (`--max-memory`).
+    pub max_memory: u64,
+}
+
+impl Context {
+    /// Prints a notice on stderr (one clean line, see `message`) unless `--quiet`.
+    pub fn notice(&self, text: &str) {
+        if !self.quiet {
+            eprintln!("vesselmsr: notice: {}", message::clean(text));
+        }
+    }
 }
 
 /// Parses the command line, runs the command and returns the process exit status.
 pub fn run() -> i32 {
+    outputs::install_signal_cleanup();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
+        Err(e) if e.use_stderr() => {
+            eprintln!("vesselmsr: error: {}", message::usage_error_line(&e));
+            return 2;
+        }
         Err(e) => {
+            // --help and --version.
             let _ = e.print();
-            return if e.use_stderr() { 2 } else { 0 };
+            return 0;
         }
     };
     match execute(cli) {
         Ok(()) => 0,
         Err(e) => {
-            eprintln!("vesselmsr: error: {}", one_line(&e));
+            eprintln!("vesselmsr: error: {}", message::error_line(&e));
             2
         }
     }
 }
 
 fn execute(cli: Cli) -> anyhow::Result<()> {
-    if let Some(n) = cli.threads {
-        anyhow::ensure!(n >= 1, "--threads must be at least 1");
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()?;
-    }
+    let max_memory = budget::max_memory(cli.max_memory.as_deref())?;
     let ctx = Context {
         quiet: cli.quiet,
         json: cli.json,
+        max_memory,
     };
+    if let Some(n) = cli.threads {
+        anyhow::ensure!(n >= 1, "--threads must be at least 1");
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        let most = MAX_THREADS_PER_CORE * cores;
+        if n > most {
+            ctx.notice(&format!(
+                "--threads {n} capped to {most} ({MAX_THREADS_PER_CORE} per core, {cores} cores)"
+            ));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.min(most))
+            .build_global()?;
+    }
     match cli.command {
         Command::Info { mesh } => info::run(&ctx, &mesh),
         Command::Cap(args) => cap::run(&ctx, &args),
@@ -139,21 +175,8 @@ fn execute(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
-/// The error and its causes on one line, leaving out a cause whose text the message already
-/// carries (the library's I/O errors print their OS error themselves).
-fn one_line(e: &anyhow::Error) -> String {
-    let mut message = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if !message.contains(&text) {
-            if !message.is_empty() {
-                message.push_str(": ");
-            }
-            message.push_str(&text);
-        }
-    }
-    message.replace('\n', " ")
-}
+/// Most worker threads per core `--threads` gives (more only cost memory and start-up time).
+const MAX_THREADS_PER_CORE: usize = 4;
 
 /// Writes a value as pretty JSON to `path` (atomically).
 fn write_json_file<T: serde::Serialize>(path: &std::path::Path, value: &T) -> anyhow::Result<()> {

@@ -3,12 +3,12 @@
 //! [`crate::inpaint::phantom`]; test data for the inpainting of paper Section 4). All three files
 //! are written, or none.
 
+use super::outputs::Outputs;
 use super::{print_json, progress, Context};
 use crate::inpaint::phantom::{make_phantom, PhantomKind, PhantomOptions};
-use crate::inpaint::region::{write_regions, Ball, BallEntry};
+use crate::inpaint::region::{write_regions, BallEntry};
 use crate::io::{write_mesh, MeshFormat};
 use crate::mesh::info::mesh_info;
-use crate::Result;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, clap::Args)]
@@ -57,9 +57,10 @@ pub fn run(ctx: &Context, args: &PhantomArgs) -> anyhow::Result<()> {
         ..Default::default()
     };
     if let Some(r) = args.radius {
+        // Far beyond this the phantom's coordinates, areas and volumes overflow.
         anyhow::ensure!(
-            r.is_finite() && r > 0.0,
-            "--radius must be a positive length, got {r}"
+            (1e-30..=1e30).contains(&r),
+            "--radius must be a length from 1e-30 to 1e30, got {r}"
         );
         opts.radius = r;
     }
@@ -75,26 +76,17 @@ pub fn run(ctx: &Context, args: &PhantomArgs) -> anyhow::Result<()> {
             opts.radius
         );
     }
-    // Refuse unwritable formats and clashing names before any work is done.
+    // Refuse unwritable formats, folders and clashing names before any work is done.
     MeshFormat::from_path(&args.output)?;
     MeshFormat::from_path(&args.truth)?;
-    let paths = [&args.output, &args.truth, &args.regions_out];
-    for (i, a) in paths.iter().enumerate() {
-        for b in &paths[i + 1..] {
-            anyhow::ensure!(a != b, "{}: named for two outputs", a.display());
-        }
-    }
+    let mut outputs = Outputs::new(&[&args.output, &args.truth, &args.regions_out], &[])?;
     let bar = progress::spinner(ctx.quiet, "building the phantom");
     let phantom = make_phantom(kind, &opts)?;
     bar.finish_and_clear();
-    write_all(
-        &args.output,
-        &args.truth,
-        &args.regions_out,
-        &phantom.damaged,
-        &phantom.truth,
-        &phantom.regions,
-    )?;
+    outputs.write(&args.output, |p| write_mesh(p, &phantom.damaged))?;
+    outputs.write(&args.truth, |p| write_mesh(p, &phantom.truth))?;
+    outputs.write(&args.regions_out, |p| write_regions(p, &phantom.regions))?;
+    outputs.commit()?;
     let damaged = mesh_info(&phantom.damaged);
     let truth = mesh_info(&phantom.truth);
     let damaged_volume = damaged.volume.unwrap_or(damaged.signed_volume);
@@ -147,47 +139,4 @@ pub fn run(ctx: &Context, args: &PhantomArgs) -> anyhow::Result<()> {
         balls.join("; ")
     );
     Ok(())
-}
-
-/// Writes the three outputs to temporaries beside their targets, then renames them into place;
-/// on a failure, removes every temporary. So a failed write (full disk, unwritable folder) leaves
-/// none of the three; only a rename failing after an earlier one succeeded could leave a part.
-fn write_all(
-    damaged_path: &Path,
-    truth_path: &Path,
-    regions_path: &Path,
-    damaged: &crate::TriMesh,
-    truth: &crate::TriMesh,
-    regions: &[Ball],
-) -> Result<()> {
-    let temps = [
-        temporary(damaged_path),
-        temporary(truth_path),
-        temporary(regions_path),
-    ];
-    let written = write_mesh(&temps[0], damaged)
-        .and_then(|_| write_mesh(&temps[1], truth))
-        .and_then(|_| write_regions(&temps[2], regions));
-    let renamed = written.and_then(|_| {
-        for (temp, target) in temps.iter().zip([damaged_path, truth_path, regions_path]) {
-            std::fs::rename(temp, target).map_err(|e| crate::Error::io(target, e))?;
-        }
-        Ok(())
-    });
-    if renamed.is_err() {
-        for temp in &temps {
-            let _ = std::fs::remove_file(temp);
-        }
-    }
-    renamed
-}
-
-/// A hidden name beside `path` keeping its extension (so the mesh writer picks the format).
-fn temporary(path: &Path) -> PathBuf {
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    let ext = path
-        .extension()
-        .map(|e| format!(".{}", e.to_string_lossy()))
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.phantom-{}{ext}", std::process::id()))
 }

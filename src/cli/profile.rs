@@ -2,6 +2,7 @@
 //! inscribed diameters along every branch of the vessel's centreline, as CSV and as a plot.
 
 use super::centerline::{centerline_for, CenterlineSource};
+use super::outputs::Outputs;
 use super::{print_json, progress, Context};
 use crate::centerline::profile::measure_profiles;
 use crate::centerline::stenosis::{find_stenoses, StenosisFindOptions};
@@ -10,7 +11,7 @@ use crate::mesh::units::{check_vessel_scale, VesselScaleOptions};
 use crate::report::image::write_png;
 use crate::report::profile_plot::profile_picture;
 use crate::Error;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Debug, clap::Args)]
 pub struct ProfileArgs {
@@ -29,6 +30,11 @@ pub struct ProfileArgs {
 }
 
 pub fn run(ctx: &Context, args: &ProfileArgs) -> anyhow::Result<()> {
+    let targets: Vec<&Path> = std::iter::once(&args.output)
+        .chain(&args.picture)
+        .map(|p| &**p)
+        .collect();
+    let mut outputs = Outputs::new(&targets, &[])?;
     let bar = progress::spinner(ctx.quiet, "measuring the diameter profiles");
     let (mesh, cl) = centerline_for(ctx, &args.source)?;
     let scale = args
@@ -55,36 +61,39 @@ pub fn run(ctx: &Context, args: &ProfileArgs) -> anyhow::Result<()> {
     };
     bar.finish_and_clear();
     let path = &args.output;
-    write_atomic(path, |out| {
-        let io = |e| Error::io(path, e);
-        writeln!(
-            out,
-            "branch,s,x,y,z,inscribed_diameter,equivalent_diameter,area"
-        )
-        .map_err(io)?;
-        for prof in &profiles {
-            for p in &prof.points {
-                let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
-                writeln!(
-                    out,
-                    "{},{},{},{},{},{},{},{}",
-                    prof.branch,
-                    p.s,
-                    p.position[0],
-                    p.position[1],
-                    p.position[2],
-                    p.inscribed_diameter,
-                    opt(p.equivalent_diameter),
-                    opt(p.area)
-                )
-                .map_err(io)?;
+    outputs.write(path, |path| {
+        write_atomic(path, |out| {
+            let io = |e| Error::io(path, e);
+            writeln!(
+                out,
+                "branch,s,x,y,z,inscribed_diameter,equivalent_diameter,area"
+            )
+            .map_err(io)?;
+            for prof in &profiles {
+                for p in &prof.points {
+                    let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
+                    writeln!(
+                        out,
+                        "{},{},{},{},{},{},{},{}",
+                        prof.branch,
+                        p.s,
+                        p.position[0],
+                        p.position[1],
+                        p.position[2],
+                        p.inscribed_diameter,
+                        opt(p.equivalent_diameter),
+                        opt(p.area)
+                    )
+                    .map_err(io)?;
+                }
             }
-        }
-        Ok(())
+            Ok(())
+        })
     })?;
     if let (Some(p), Some(image)) = (&args.picture, &image) {
-        write_png(p, image)?;
+        outputs.write(p, |p| write_png(p, image))?;
     }
+    outputs.commit()?;
     if ctx.json {
         return print_json(&serde_json::json!({
             "mesh": args.source.mesh,

@@ -15,13 +15,14 @@
 //! across a curved S_{i−1}, which are not errors of the reconstruction). A missing, damaged or
 //! foreign archive, or a K beyond its levels, is refused before anything is written.
 
+use super::outputs::Outputs;
 use super::{print_json, progress, Context};
 use crate::bvh::MeshBvh;
 use crate::io::{write_mesh, MeshFormat};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::mesh::distance::{surface_distance, SurfaceDistanceOptions};
 use crate::mesh::info::{mesh_info, MeshInfo};
-use crate::msr::archive::read_msr;
+use crate::msr::archive::read_msr_within;
 use crate::msr::reconstruct::{rebuild_from_tangent_planes, AdvectOptions};
 use indicatif::ProgressStyle;
 use rayon::prelude::*;
@@ -84,7 +85,8 @@ struct ReconstructOutput {
 
 pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
     MeshFormat::from_path(&args.output)?;
-    let msr = read_msr(&args.archive)?;
+    let mut outputs = Outputs::new(&[&args.output], &[])?;
+    let msr = read_msr_within(&args.archive, ctx.max_memory)?;
     let n = msr.levels();
     let k = args.level;
     anyhow::ensure!(
@@ -180,7 +182,8 @@ pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
             (surface, "levelset")
         }
     };
-    write_mesh(&args.output, &surface)?;
+    outputs.write(&args.output, |p| write_mesh(p, &surface))?;
+    outputs.commit()?;
     let out = ReconstructOutput {
         voxel: h,
         method,

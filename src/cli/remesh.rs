@@ -5,6 +5,7 @@
 //! a voxel (`mesh::decimate`).
 
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::outputs::Outputs;
 use super::{print_json, Context};
 use crate::bvh::MeshBvh;
 use crate::io::{write_mesh, MeshFormat};
@@ -86,6 +87,7 @@ pub(super) fn remesh_file(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<Re
             "--decimate must be a positive number of voxels, got {v}"
         );
     }
+    let mut outputs = Outputs::new(&[&args.output], &[])?;
     // Marching cubes reads φ only next to its zero level set: the narrow band is enough.
     let Voxelized {
         mesh,
@@ -106,12 +108,12 @@ pub(super) fn remesh_file(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<Re
     } else {
         (extract_surface(&phi, &extract)?, 0)
     };
-    if cavities_joined > 0 && !ctx.quiet {
+    if cavities_joined > 0 {
         bar.suspend(|| {
-            eprintln!(
-                "note: reopened {cavities_joined} fold(s) of the input that closed into an enclosed \
+            ctx.notice(&format!(
+                "reopened {cavities_joined} fold(s) of the input that closed into an enclosed \
                  cavity at this voxel size"
-            )
+            ))
         });
     }
     let mc = t.elapsed().as_secs_f64();
@@ -148,7 +150,8 @@ pub(super) fn remesh_file(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<Re
     let decimate_s = t.elapsed().as_secs_f64();
     let output = mesh_info(&surface);
     let t = Instant::now();
-    write_mesh(&args.output, &surface)?;
+    outputs.write(&args.output, |p| write_mesh(p, &surface))?;
+    outputs.commit()?;
     let write = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let out = RemeshOutput {

@@ -2,12 +2,15 @@
 //! damaged regions D of a vessel (paper Section 4, Algorithm 4; see [`crate::inpaint::repair`]),
 //! write the repaired watertight mesh, and report the inpainted volume and the stenosis per region.
 
+use super::outputs::Outputs;
+use super::region_limits::check_regions;
+use super::repair_budget;
 use super::{print_json, progress, Context};
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
 use crate::centerline::{compute_centerline, CenterlineOptions};
 use crate::inpaint::holes::{classify_loops, hole_regions, LoopKind, LoopOptions};
-use crate::inpaint::region::{parse_ball, read_regions, validate_regions, Ball};
+use crate::inpaint::region::{parse_ball, read_regions, Ball};
 use crate::inpaint::guided::GuideKind;
 use crate::inpaint::repair::{repair_with_centerline, InpaintMethod, Repair, RepairOptions};
 use crate::io::{read_mesh, write_atomic, write_mesh, MeshFormat};
@@ -24,7 +27,7 @@ use crate::report::repair_report::{
 use crate::TriMesh;
 use anyhow::Context as _;
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Debug, clap::Args)]
@@ -176,6 +179,12 @@ pub fn run(ctx: &Context, args: &RepairArgs) -> anyhow::Result<()> {
 pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Report> {
     let start = Instant::now();
     MeshFormat::from_path(&args.output)?;
+    let targets: Vec<&Path> = std::iter::once(&args.output)
+        .chain(&args.report)
+        .chain(&args.picture)
+        .map(|p| &**p)
+        .collect();
+    let mut outputs = Outputs::new(&targets, &[])?;
     let method: InpaintMethod = args.method.parse()?;
     for (name, v) in [
         ("-c/--speed", args.speed),
@@ -230,12 +239,10 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
             &StenosisFindOptions::default(),
         )),
         Err(e) => {
-            if !ctx.quiet {
-                eprintln!(
-                    "vesselmsr: notice: {}: no centreline ({e}); regions are sized and measured without it",
-                    args.mesh.display()
-                );
-            }
+            ctx.notice(&format!(
+                "{}: no centreline ({e}); regions are sized and measured without it",
+                args.mesh.display()
+            ));
             None
         }
     };
@@ -252,11 +259,11 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
             .as_ref()
             .map(|h| h.lesion_regions(p))
             .unwrap_or_default();
-        if found.is_empty() && !ctx.quiet {
-            eprintln!(
-                "vesselmsr: notice: {}: no narrowing of {p}% or more found",
+        if found.is_empty() {
+            ctx.notice(&format!(
+                "{}: no narrowing of {p}% or more found",
                 args.mesh.display()
-            );
+            ));
         }
         for b in found {
             balls.push(b);
@@ -302,12 +309,11 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
         notices.push("no picture written: nothing was inpainted".into());
     }
     if !nothing_to_do {
-        validate_regions(&mesh, &balls).with_context(|| format!("{}", args.mesh.display()))?;
+        let mesh_name = args.mesh.display().to_string();
+        check_regions(ctx, &mesh, &mesh_name, &mut balls, &mut sources)?;
     }
-    if !ctx.quiet {
-        for n in &notices {
-            eprintln!("vesselmsr: notice: {}: {n}", args.mesh.display());
-        }
+    for n in &notices {
+        ctx.notice(&format!("{}: {n}", args.mesh.display()));
     }
     let opts = RepairOptions {
         method,
@@ -322,6 +328,8 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
             .unwrap_or(RepairOptions::default().max_iterations),
         ..RepairOptions::default()
     };
+    repair_budget::check(&mesh, &balls, &opts, ctx.max_memory)
+        .with_context(|| args.mesh.display().to_string())?;
     let bar = progress::spinner(ctx.quiet, "repairing");
     let mut result = if nothing_to_do {
         unrepaired(&mesh, &opts)
@@ -407,34 +415,32 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
         info.leaks().join(", ")
     );
     let text = serde_json::to_string_pretty(&report)?;
-    write_mesh(&args.output, &result.mesh)?;
+    outputs.write(&args.output, |p| write_mesh(p, &result.mesh))?;
     if let Some(path) = &args.report {
-        write_atomic(path, |out| {
-            out.write_all(text.as_bytes())
-                .and_then(|_| out.write_all(b"\n"))
-                .map_err(|e| crate::Error::io(path, e))
+        outputs.write(path, |path| {
+            write_atomic(path, |out| {
+                out.write_all(text.as_bytes())
+                    .and_then(|_| out.write_all(b"\n"))
+                    .map_err(|e| crate::Error::io(path, e))
+            })
         })?;
     }
     if let Some(path) = args.picture.as_ref().filter(|_| !balls.is_empty()) {
         // The input as it was, its holes open.
-        render_repair(
-            &mesh,
-            &result.mesh,
-            &balls,
-            path,
-            &RepairPictureOptions::default(),
-        )?;
+        outputs.write(path, |p| {
+            let opts = RepairPictureOptions::default();
+            render_repair(&mesh, &result.mesh, &balls, p, &opts)
+        })?;
     }
+    outputs.commit()?;
     bar.finish_and_clear();
-    if !ctx.quiet {
-        for n in &result.notices {
-            eprintln!("vesselmsr: notice: {}: {n}", args.mesh.display());
-        }
-        if let Some(why) = &result.fallback {
-            eprintln!(
-                "vesselmsr: notice: the patch could not be stitched into the kept triangles ({why}); the whole vessel was re-meshed"
-            );
-        }
+    for n in &result.notices {
+        ctx.notice(&format!("{}: {n}", args.mesh.display()));
+    }
+    if let Some(why) = &result.fallback {
+        ctx.notice(&format!(
+            "the patch could not be stitched into the kept triangles ({why}); the whole vessel was re-meshed"
+        ));
     }
     Ok(report)
 }

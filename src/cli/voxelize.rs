@@ -2,6 +2,7 @@
 //! inside), exact near the surface and redistanced by fast sweeping elsewhere.
 
 use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::outputs::Outputs;
 use super::{print_json, Context};
 use crate::io::{write_npy, write_nrrd, write_vti};
 use crate::levelset::redistance::{redistance, RedistanceOptions};
@@ -62,6 +63,7 @@ struct VoxelizeOutput {
 
 pub fn run(ctx: &Context, args: &VoxelizeArgs) -> anyhow::Result<()> {
     let format = grid_format(&args.output)?;
+    let mut outputs = Outputs::new(&[&args.output], &[])?;
     let Voxelized {
         spec,
         mut phi,
@@ -86,11 +88,13 @@ pub fn run(ctx: &Context, args: &VoxelizeArgs) -> anyhow::Result<()> {
     let redistance_s = t.elapsed().as_secs_f64();
     bar.set_message("writing");
     let t = Instant::now();
-    match format {
-        GridFormat::Npy => write_npy(&args.output, &phi)?,
-        GridFormat::Vti => write_vti(&args.output, &phi)?,
-        GridFormat::Nrrd => write_nrrd(&args.output, &phi)?,
-    }
+    // The .npy sidecar lands beside its array in the staging folder and is committed with it.
+    outputs.write(&args.output, |p| match format {
+        GridFormat::Npy => write_npy(p, &phi),
+        GridFormat::Vti => write_vti(p, &phi),
+        GridFormat::Nrrd => write_nrrd(p, &phi),
+    })?;
+    outputs.commit()?;
     let write = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let out = VoxelizeOutput {

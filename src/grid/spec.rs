@@ -27,6 +27,10 @@ use nalgebra::Point3;
 /// Default memory limit: 8 GiB.
 pub const DEFAULT_MAX_MEMORY_BYTES: u64 = 8 << 30;
 
+/// Largest coordinate a grid is sized for: φ is float32 (largest 3.4e38), and distances and
+/// their squares must stay finite in the level-set steps.
+pub const MAX_COORDINATE: f64 = 1e18;
+
 /// Cells along the longest axis below which the default voxel size never goes.
 pub const DEFAULT_MIN_CELLS: usize = 256;
 
@@ -140,6 +144,13 @@ pub fn grid_for_box(
     if !(longest > 0.0 && longest.is_finite() && extent.min() >= 0.0) {
         return Err(Error::Geometry(format!(
             "cannot size a grid for a mesh whose bounding box is {lo} .. {hi}"
+        )));
+    }
+    let farthest = lo.coords.abs().max().max(hi.coords.abs().max());
+    if farthest > MAX_COORDINATE {
+        return Err(Error::Geometry(format!(
+            "coordinates up to {farthest:e} are beyond what a float32 grid holds (±{MAX_COORDINATE:e}): \
+             rescale the mesh"
         )));
     }
     if opts.grids == 0 {

@@ -6,8 +6,9 @@
 //! `.vtk` POLYDATA in the encodings VTK writes (`vtp`, `vtk_legacy`: polygons fan-triangulated,
 //! triangle strips cut, lines and vertices ignored). Every mesh
 //! read is validated: finite coordinates, at least one triangle, indices in range, and at least one
-//! non-degenerate triangle. Every error names the file and the problem in one line. Writers go
-//! through [`write_atomic`], so a failed write leaves no partial file.
+//! non-degenerate triangle; every mesh written passes the same checks (and the float32 range for
+//! STL). Every error names the file and the problem in one line. Writers go through
+//! [`write_atomic`], so a failed write leaves no partial file.
 //!
 //! Points picked in 3D Slicer come from its markups files (`markups`: `.mrk.json`, `.fcsv`).
 //!
@@ -33,7 +34,7 @@ pub use atomic::write_atomic;
 pub use centerline::{read_centerline_json, write_centerline_json, write_centerline_vtp};
 pub use markups::{is_markups_path, read_markups};
 pub use npy::{npy_sidecar_path, read_npy, write_npy, NpySidecar};
-pub use npz::{read_npz, write_npz, NpyArray, NpyData};
+pub use npz::{read_npz, read_npz_within, write_npz, NpyArray, NpyData};
 pub use nrrd::{read_nrrd, write_nrrd};
 pub use vti::{read_vti, write_vti, VTI_ARRAY_NAME};
 pub use vtk_legacy::{read_vtk_legacy, write_vtk_legacy, write_vtk_legacy_to};
@@ -91,15 +92,20 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 pub fn read_mesh(path: &Path) -> Result<TriMesh> {
     let format = MeshFormat::from_path(path)?;
     let bytes = read_bytes(path)?;
+    parse_mesh(&bytes, format).map_err(|m| Error::format(path, m))
+}
+
+/// Parses and validates the bytes of a mesh file of `format` (what [`read_mesh`] does after
+/// reading the file; the fuzz targets call it on arbitrary bytes). The error is one line.
+pub fn parse_mesh(bytes: &[u8], format: MeshFormat) -> std::result::Result<TriMesh, String> {
     let mesh = match format {
-        MeshFormat::Stl => stl::read(&bytes),
-        MeshFormat::Obj => obj::read(&bytes),
-        MeshFormat::Ply => ply::read(&bytes).map(|p| p.mesh),
-        MeshFormat::Vtp => vtp::parse_vtp(&bytes).and_then(|d| d.to_mesh()),
-        MeshFormat::Vtk => vtk_legacy::parse_vtk_legacy(&bytes).and_then(|d| d.to_mesh()),
-    }
-    .map_err(|m| Error::format(path, m))?;
-    validate::validate_mesh(&mesh).map_err(|m| Error::format(path, m))?;
+        MeshFormat::Stl => stl::read(bytes),
+        MeshFormat::Obj => obj::read(bytes),
+        MeshFormat::Ply => ply::read(bytes).map(|p| p.mesh),
+        MeshFormat::Vtp => vtp::parse_vtp(bytes).and_then(|d| d.to_mesh()),
+        MeshFormat::Vtk => vtk_legacy::parse_vtk_legacy(bytes).and_then(|d| d.to_mesh()),
+    }?;
+    validate::validate_mesh(&mesh)?;
     Ok(mesh)
 }
 
@@ -155,7 +161,7 @@ pub fn read_mesh_with_scalars(path: &Path) -> Result<(TriMesh, ScalarFields)> {
 /// points, raw appended data) or binary legacy VTK (doubles). Atomic.
 pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
     let format = MeshFormat::from_path(path)?;
-    validate::check_indices(mesh).map_err(Error::InvalidMesh)?;
+    check_writable(path, mesh, format)?;
     if format == MeshFormat::Vtk && (mesh.num_faces() as u64 * 4 > i32::MAX as u64) {
         return Err(Error::format(
             path,
@@ -211,7 +217,7 @@ pub fn write_mesh_with_fields(
             "per-vertex scalars can only be written to a .ply, .vtp or .vtk file",
         ));
     }
-    validate::check_indices(mesh).map_err(Error::InvalidMesh)?;
+    check_writable(path, mesh, format)?;
     for (what, fields, count, unit) in [
         ("scalar", point_scalars, mesh.num_vertices(), "vertices"),
         ("face scalar", face_scalars, mesh.num_faces(), "triangles"),
@@ -259,6 +265,15 @@ pub fn write_mesh_with_fields(
         MeshFormat::Vtp => write_vtp(path, &data),
         _ => write_vtk_legacy(path, &data),
     }
+}
+
+/// Refuses to write a mesh no reader would take back (see `validate::check_writable`).
+fn check_writable(path: &Path, mesh: &TriMesh, format: MeshFormat) -> Result<()> {
+    let largest = match format {
+        MeshFormat::Stl => f32::MAX as f64,
+        _ => f64::MAX,
+    };
+    validate::check_writable(mesh, largest).map_err(|m| Error::format(path, m))
 }
 
 /// Appends the fan of `corners.len() − 2` triangles from the first corner of a polygon (the

@@ -159,12 +159,37 @@ pub fn read_npy(path: &Path) -> Result<Grid3> {
     Grid3::from_data(dims, transform, data).map_err(|e| Error::format(&sidecar_path, e.to_string()))
 }
 
-/// Shape and values of a 3-D '<f4' C-order `.npy` file.
-fn parse_npy(bytes: &[u8]) -> std::result::Result<([usize; 3], Vec<f32>), String> {
-    if bytes.len() < 10 || &bytes[..6] != MAGIC {
-        return Err("not a NumPy .npy file (bad magic)".into());
+/// The header of a `.npy` array: dtype, order, shape and where the data starts.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct NpyHeader {
+    /// The dtype text without quotes, e.g. `<f4`.
+    pub descr: String,
+    /// C-order shape (empty for a scalar).
+    pub shape: Vec<usize>,
+    /// Byte offset of the data.
+    pub data_start: usize,
+}
+
+impl NpyHeader {
+    /// Number of values the shape holds (None on overflow).
+    pub fn count(&self) -> Option<usize> {
+        self.shape.iter().try_fold(1usize, |a, &d| a.checked_mul(d))
     }
-    let (header_len, start): (usize, usize) = match bytes[6] {
+}
+
+/// Bytes of a `.npy` file needed to know where its header ends: the magic, version and length.
+pub(crate) const PREAMBLE: usize = 12;
+
+/// Largest header accepted (NumPy writes under a hundred bytes; version 1.0 allows 64 KiB).
+const MAX_HEADER: usize = 1 << 20;
+
+/// Where the header dict of a `.npy` file ends (the data start), from its first bytes (at least
+/// 10, or [`PREAMBLE`] for format versions 2 and 3).
+pub(crate) fn header_end(bytes: &[u8]) -> std::result::Result<usize, String> {
+    if bytes.len() < 10 || &bytes[..6] != MAGIC {
+        return Err("not a NumPy .npy array (no \\x93NUMPY magic)".into());
+    }
+    let (len, start): (usize, usize) = match bytes[6] {
         1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
         2 | 3 if bytes.len() >= 12 => (
             u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
@@ -172,39 +197,76 @@ fn parse_npy(bytes: &[u8]) -> std::result::Result<([usize; 3], Vec<f32>), String
         ),
         v => return Err(format!("unsupported .npy format version {v}.{}", bytes[7])),
     };
-    let end = start
-        .checked_add(header_len)
-        .filter(|&e| e <= bytes.len())
-        .ok_or("truncated .npy header")?;
-    let dict = std::str::from_utf8(&bytes[start..end]).map_err(|_| "the header is not text")?;
-    let descr = dict_value(dict, "descr").ok_or("the header has no 'descr'")?;
-    if descr.trim_matches(['\'', '"']) != "<f4" {
-        return Err(format!(
-            "dtype {descr} is not supported (expected little-endian float32 '<f4')"
-        ));
+    if len > MAX_HEADER {
+        return Err(format!("a header of {len} bytes is not a .npy header"));
     }
+    Ok(start + len)
+}
+
+/// Parses the header of a `.npy` file (format versions 1.0 to 3.0, C order); `bytes` holds at
+/// least the header. Every malformed header is an error, never a panic.
+pub(crate) fn parse_header(bytes: &[u8]) -> std::result::Result<NpyHeader, String> {
+    let end = header_end(bytes)?;
+    let start = if bytes[6] == 1 { 10 } else { 12 };
+    let dict = bytes.get(start..end).ok_or("truncated .npy header")?;
+    let dict = std::str::from_utf8(dict).map_err(|_| "the header is not text")?;
+    let descr = dict_value(dict, "descr").ok_or("the header has no 'descr'")?;
+    let descr = descr
+        .strip_prefix(['\'', '"'])
+        .and_then(|d| d.strip_suffix(['\'', '"']))
+        .ok_or_else(|| {
+            format!(
+                "cannot read the dtype {}",
+                super::text::show(descr.as_bytes())
+            )
+        })?;
     let fortran = dict_value(dict, "fortran_order").ok_or("the header has no 'fortran_order'")?;
     if fortran != "False" {
         return Err("Fortran-ordered arrays are not supported (expected C order)".into());
     }
     let shape_text = dict_value(dict, "shape").ok_or("the header has no 'shape'")?;
-    let shape: Vec<usize> = shape_text
-        .trim_start_matches('(')
-        .trim_end_matches(')')
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|s| s.parse::<usize>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| format!("cannot read the shape {shape_text}"))?;
-    let [nz, ny, nx] = shape[..] else {
+    let shape = parse_shape(shape_text).ok_or_else(|| {
+        format!(
+            "cannot read the shape {}",
+            super::text::show(shape_text.as_bytes())
+        )
+    })?;
+    Ok(NpyHeader {
+        descr: descr.to_owned(),
+        shape,
+        data_start: end,
+    })
+}
+
+/// A shape tuple `(a, b, c)`, `(a,)` or `()`.
+fn parse_shape(text: &str) -> Option<Vec<usize>> {
+    let inner = text.strip_prefix('(')?.strip_suffix(')')?;
+    let parts: Vec<&str> = inner.split(',').map(str::trim).collect();
+    // A trailing comma leaves one empty part at the end; no other part may be empty.
+    let parts = match parts.split_last() {
+        Some((last, rest)) if last.is_empty() => rest,
+        _ => &parts[..],
+    };
+    parts.iter().map(|p| p.parse::<usize>().ok()).collect()
+}
+
+/// Shape and values of a 3-D '<f4' C-order `.npy` file.
+fn parse_npy(bytes: &[u8]) -> std::result::Result<([usize; 3], Vec<f32>), String> {
+    let header = parse_header(bytes)?;
+    if header.descr != "<f4" {
+        return Err(format!(
+            "dtype '{}' is not supported (expected little-endian float32 '<f4')",
+            super::text::show(header.descr.as_bytes())
+        ));
+    }
+    let [nz, ny, nx] = header.shape[..] else {
         return Err(format!(
             "the array has {} dimensions, a grid needs 3",
-            shape.len()
+            header.shape.len()
         ));
     };
     let count = Grid3::node_count([nx, ny, nz]).map_err(|e| e.to_string())?;
-    let data = &bytes[end..];
+    let data = &bytes[header.data_start..];
     if Some(data.len()) != count.checked_mul(4) {
         return Err(format!(
             "the shape ({nz}, {ny}, {nx}) needs {count} float32 values but the file holds {} bytes of data",
@@ -222,6 +284,7 @@ fn dict_value<'a>(dict: &'a str, key: &str) -> Option<&'a str> {
         .iter()
         .find_map(|q| dict.find(q.as_str()).map(|i| i + q.len()))?;
     let rest = dict[at..].trim_start().strip_prefix(':')?.trim_start();
+    // Every position below follows an ASCII character, so the slices are on char boundaries.
     let end = match rest.chars().next()? {
         '(' => rest.find(')')? + 1,
         q @ ('\'' | '"') => rest[1..].find(q)? + 2,
@@ -247,6 +310,39 @@ mod tests {
             assert_eq!(shape, [dims[2], dims[1], dims[0]]);
             assert_eq!(data.len(), n);
         }
+    }
+
+    #[test]
+    fn malformed_headers_are_errors_not_panics() {
+        let with_dict = |dict: &str| {
+            let mut b = MAGIC.to_vec();
+            b.extend_from_slice(&[1, 0]);
+            b.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+            b.extend_from_slice(dict.as_bytes());
+            b
+        };
+        for dict in [
+            "{'descr': '<f4', 'fortran_order': False, 'shape': ), }",
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (é, 2), }",
+            "{'descr': '<f4', 'fortran_order': False, 'shape': é, }",
+            "{'descr': 'é}",
+            "{'descr': é, 'fortran_order': False, 'shape': (1,), }",
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (1,,2), }",
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (",
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (1, 2",
+            "{'descr': '<f4', 'fortran_order': False, 'shape': (99999999999999999999,), }",
+            "{'descr': '<f4', 'fortran_order': True, 'shape': (1, 1, 1), }",
+        ] {
+            assert!(parse_header(&with_dict(dict)).is_err(), "{dict}");
+        }
+        let ok = parse_header(&with_dict(
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (2, 3), }",
+        ))
+        .unwrap();
+        assert_eq!((ok.descr.as_str(), &ok.shape[..]), ("<f8", &[2, 3][..]));
+        assert_eq!(parse_shape("()"), Some(vec![]));
+        assert_eq!(parse_shape("(4,)"), Some(vec![4]));
+        assert_eq!(parse_shape("(,)"), None);
     }
 
     #[test]

@@ -8,6 +8,7 @@
 //! version 1.0 to 3.0, little-endian, C order, a byte count that matches the shape), so a
 //! truncated or edited archive gives an error naming the file, the member and the problem.
 
+use super::npy::{header_end, parse_header, NpyHeader, PREAMBLE};
 use super::write_atomic;
 use crate::{Error, Result};
 use std::io::{Read, Write};
@@ -136,48 +137,10 @@ impl NpyArray {
 
     /// Parses `.npy` bytes of the dtypes above.
     pub fn from_npy(bytes: &[u8]) -> std::result::Result<NpyArray, String> {
-        if bytes.len() < 10 || &bytes[..6] != MAGIC {
-            return Err("not a .npy array (no \\x93NUMPY magic)".into());
-        }
-        let (len, start): (usize, usize) = match bytes[6] {
-            1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
-            2 | 3 if bytes.len() >= 12 => (
-                u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
-                12,
-            ),
-            v => return Err(format!("unsupported .npy format version {v}")),
-        };
-        let end = start
-            .checked_add(len)
-            .filter(|&e| e <= bytes.len())
-            .ok_or("the header runs past the end")?;
-        let dict = std::str::from_utf8(&bytes[start..end]).map_err(|_| "the header is not text")?;
-        let value = |key: &str| -> std::result::Result<&str, String> {
-            let k = format!("'{key}':");
-            let at = dict.find(&k).ok_or(format!("no '{key}' in the header"))? + k.len();
-            Ok(dict[at..].trim_start())
-        };
-        let descr = value("descr")?;
-        let descr = descr
-            .strip_prefix('\'')
-            .and_then(|d| d.split('\'').next())
-            .ok_or("cannot read descr")?;
-        if !value("fortran_order")?.starts_with("False") {
-            return Err("Fortran-order arrays are not supported".into());
-        }
-        let shape_text = value("shape")?;
-        let close = shape_text.find(')').ok_or("cannot read shape")?;
-        let shape: Vec<usize> = shape_text[1..close]
-            .split(',')
-            .map(str::trim)
-            .filter(|s| !s.is_empty())
-            .map(str::parse)
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| format!("cannot read shape {}", &shape_text[..=close]))?;
-        let count = shape
-            .iter()
-            .try_fold(1usize, |a, &d| a.checked_mul(d))
-            .ok_or("shape too large")?;
+        let header = parse_header(bytes)?;
+        let (descr, shape) = (header.descr.as_str(), header.shape.clone());
+        let count = header.count().ok_or("shape too large")?;
+        let end = header.data_start;
         let body = &bytes[end..];
         let need = |width: usize| -> std::result::Result<(), String> {
             match count.checked_mul(width) {
@@ -220,7 +183,7 @@ impl NpyArray {
             }
             d if d.starts_with("<U") && shape.is_empty() => {
                 let n: usize = d[2..].parse().map_err(|_| format!("bad dtype {d}"))?;
-                need(4 * n)?;
+                need(n.checked_mul(4).ok_or("text too long")?)?;
                 let text: String = body
                     .chunks_exact(4)
                     .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
@@ -257,14 +220,22 @@ pub fn write_npz(path: &Path, members: &[(&str, NpyArray)]) -> Result<()> {
     })
 }
 
-/// Reads every `.npy` member of the `.npz` at `path`, in archive order (names without `.npy`).
+/// Reads every `.npy` member of the `.npz` at `path`, in archive order (names without `.npy`),
+/// with the default limit of [`read_npz_within`] (8 GiB).
 pub fn read_npz(path: &Path) -> Result<Vec<(String, NpyArray)>> {
+    read_npz_within(path, crate::grid::spec::DEFAULT_MAX_MEMORY_BYTES)
+}
+
+/// Reads every `.npy` member of the `.npz` at `path`, in archive order (names without `.npy`).
+/// Each member's header is read first: a member whose shape needs more than `max_bytes` is
+/// refused before its data is read, and no member is read past the size its header gives.
+pub fn read_npz_within(path: &Path, max_bytes: u64) -> Result<Vec<(String, NpyArray)>> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
         .map_err(|e| Error::format(path, format!("not a readable .npz (zip) archive: {e}")))?;
-    let mut out = Vec::with_capacity(zip.len());
+    let mut out = Vec::with_capacity(zip.len().min(1024));
     for i in 0..zip.len() {
-        let mut member = zip
+        let member = zip
             .by_index(i)
             .map_err(|e| Error::format(path, format!("member {i}: {e}")))?;
         let name = member
@@ -274,16 +245,79 @@ pub fn read_npz(path: &Path) -> Result<Vec<(String, NpyArray)>> {
         let Some(stem) = name.strip_suffix(".npy") else {
             return Err(Error::format(
                 path,
-                format!("member {name} is not a .npy array"),
+                format!("member {} is not a .npy array", show_name(&name)),
             ));
         };
-        let mut bytes = Vec::with_capacity(member.size().min(1 << 30) as usize);
-        member
-            .read_to_end(&mut bytes)
-            .map_err(|e| Error::format(path, format!("member {name}: {e}")))?;
-        let array =
-            NpyArray::from_npy(&bytes).map_err(|m| Error::format(path, format!("{name}: {m}")))?;
+        let bytes = read_member(member, max_bytes)
+            .map_err(|m| Error::format(path, format!("member {}: {m}", show_name(&name))))?;
+        let array = NpyArray::from_npy(&bytes)
+            .map_err(|m| Error::format(path, format!("member {}: {m}", show_name(&name))))?;
         out.push((stem.to_owned(), array));
     }
     Ok(out)
+}
+
+/// A member name for a message (control characters and length are the CLI's business; this
+/// keeps a hostile name from running on).
+fn show_name(name: &str) -> String {
+    super::text::show(name.as_bytes())
+}
+
+/// The bytes of one member: its header first, then exactly the data its shape needs (refused
+/// when that exceeds `max_bytes`); a member holding fewer or more bytes is an error.
+fn read_member(mut member: impl Read, max_bytes: u64) -> std::result::Result<Vec<u8>, String> {
+    let io = |e: std::io::Error| e.to_string();
+    let mut bytes = Vec::with_capacity(PREAMBLE);
+    (&mut member)
+        .take(PREAMBLE as u64)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    let end = header_end(&bytes)?;
+    let rest = end.saturating_sub(bytes.len()) as u64;
+    (&mut member)
+        .take(rest)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    let header = parse_header(&bytes)?;
+    let data = data_bytes(&header)?;
+    let total = (header.data_start as u64).saturating_add(data);
+    if total > max_bytes {
+        return Err(format!(
+            "shape {:?} of {} needs {}, more than the {} memory limit: raise --max-memory",
+            header.shape,
+            super::text::show(header.descr.as_bytes()),
+            crate::grid::spec::format_bytes(total),
+            crate::grid::spec::format_bytes(max_bytes)
+        ));
+    }
+    bytes.reserve_exact(data as usize);
+    // One byte more than the shape needs tells a member that holds too much.
+    (&mut member)
+        .take(data + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    Ok(bytes)
+}
+
+/// Bytes of data the header's dtype and shape need (`u64::MAX` when that overflows).
+fn data_bytes(header: &NpyHeader) -> std::result::Result<u64, String> {
+    let width = match header.descr.as_str() {
+        "<f8" | "<i8" => 8,
+        "<f4" | "<u4" => 4,
+        d if d.starts_with("<U") => {
+            let n: u64 = d[2..]
+                .parse()
+                .map_err(|_| format!("bad dtype {}", super::text::show(d.as_bytes())))?;
+            n.saturating_mul(4)
+        }
+        d => {
+            return Err(format!(
+                "unsupported dtype {}",
+                super::text::show(d.as_bytes())
+            ))
+        }
+    };
+    Ok(header
+        .count()
+        .map_or(u64::MAX, |c| (c as u64).saturating_mul(width)))
 }

@@ -7,6 +7,7 @@
 //! exist; only a file that fails that rule and begins with "solid" is read as ASCII.
 
 use super::text::{parse_f64, show, Tokens};
+use crate::mesh::weld::weld_key;
 use crate::TriMesh;
 use nalgebra::Point3;
 use std::collections::HashMap;
@@ -23,24 +24,28 @@ pub(crate) fn read(bytes: &[u8]) -> Result<TriMesh, String> {
     if binary_size == Some(bytes.len() as u64) {
         return read_binary(bytes);
     }
-    let too_short = |n: u64| {
+    // The message when the declared count and the file's length disagree.
+    let mismatch = |n: u64| {
+        let held = (bytes.len() - HEADER - 4) / RECORD;
+        let only = if (held as u64) < n { "only " } else { "" };
         format!(
-            "binary STL header declares {n} triangles but the file holds only {} (84 + 50·n bytes expected)",
-            (bytes.len() - HEADER - 4) / RECORD
+            "binary STL header declares {n} triangles but the file holds {only}{held} (84 + 50·n bytes expected)"
         )
     };
+    // Whole triangles missing, or beyond the declared count (the header or the file is wrong,
+    // and reading either count could drop or invent triangles).
+    let disagrees =
+        |size: u64| size > bytes.len() as u64 || bytes.len() as u64 - size >= RECORD as u64;
     if starts_with_solid(bytes) {
         return read_ascii(bytes).map_err(|message| match (declared, binary_size) {
             // A NUL byte means binary data whose header happens to begin with "solid".
-            (Some(n), Some(size)) if size > bytes.len() as u64 && bytes.contains(&0) => {
-                too_short(n)
-            }
+            (Some(n), Some(size)) if disagrees(size) && bytes.contains(&0) => mismatch(n),
             _ => message,
         });
     }
     match (declared, binary_size) {
-        (Some(n), Some(size)) if size > bytes.len() as u64 => Err(too_short(n)),
-        // Extra bytes after the last triangle: some writers pad; the declared triangles are read.
+        (Some(n), Some(size)) if disagrees(size) => Err(mismatch(n)),
+        // Less than a triangle after the last one: some writers pad; the declared ones are read.
         (Some(_), Some(_)) => read_binary(bytes),
         _ => Err(format!(
             "not an STL file: {} bytes is too short for a binary STL (84 at least) and it does not start with 'solid'",
@@ -74,8 +79,7 @@ impl Welder {
     }
 
     fn vertex(&mut self, p: [f64; 3]) -> Result<u32, String> {
-        // Adding 0.0 turns -0.0 into +0.0 and leaves every other value unchanged.
-        let key = p.map(|c| (c + 0.0).to_bits());
+        let key = weld_key(p);
         if let Some(&i) = self.index.get(&key) {
             return Ok(i);
         }

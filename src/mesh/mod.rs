@@ -1,8 +1,9 @@
 //! The triangle mesh and what is measured or repaired on it without a level set: topology
 //! (components, boundary loops, manifoldness, orientation), measures (area, enclosed volume by the
 //! divergence theorem, bounding box, edge length, genus), the `info` summary, capping of open
-//! vessel ends, simplification within a distance bound, surface-to-surface distances for `compare`, and the plausibility of a vessel's
-//! size in a named length unit.
+//! vessel ends, welding of coincident vertices, simplification within a distance bound,
+//! surface-to-surface distances for `compare`, and the plausibility of a vessel's size in a named
+//! length unit.
 
 pub mod cap;
 pub mod decimate;
@@ -14,5 +15,6 @@ pub mod primitives;
 pub mod topology;
 pub mod units;
 mod trimesh;
+pub mod weld;
 
 pub use trimesh::TriMesh;

@@ -110,8 +110,17 @@ pub fn measure_shape_in(phi: &Grid3, region: &SubBox) -> Result<(f64, f64)> {
             }
             acc
         })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        .collect::<Vec<_>>()
+        .into_iter()
+        .fold((0.0, 0.0), add_pairs);
     Ok((volume * h * h * h, area * h * h))
+}
+
+/// Sum of two pairs. The parallel parts of a sum (a layer, a fixed chunk) are collected in order
+/// and added in that order, never by rayon's `reduce`, whose tree follows the thread split: the
+/// result is then the same bits for every thread count.
+fn add_pairs(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    (a.0 + b.0, a.1 + b.1)
 }
 
 /// The nodes near the interface, for evaluating the volume of {φ < λ} at many λ.
@@ -166,7 +175,9 @@ impl NearInterface {
                     (s + f, d + df)
                 })
             })
-            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold((0.0, 0.0), add_pairs);
         (self.inside as f64 + sum, slope)
     }
 }

@@ -18,7 +18,7 @@
 
 use super::{Msr, MsrParams};
 use crate::grid::{Grid3, GridTransform};
-use crate::io::{read_npz, write_npz, NpyArray, NpyData};
+use crate::io::{read_npz_within, write_npz, NpyArray, NpyData};
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 use std::collections::HashMap;
@@ -129,9 +129,16 @@ pub fn write_msr(path: &Path, msr: &Msr) -> Result<()> {
     write_npz(path, &members)
 }
 
-/// Reads an archive written by [`write_msr`] (see the module doc for what is checked).
+/// Reads an archive written by [`write_msr`] (see the module doc for what is checked), with the
+/// default member limit of 8 GiB.
 pub fn read_msr(path: &Path) -> Result<Msr> {
-    let mut m: HashMap<String, NpyArray> = read_npz(path)?.into_iter().collect();
+    read_msr_within(path, crate::grid::spec::DEFAULT_MAX_MEMORY_BYTES)
+}
+
+/// Reads an archive written by [`write_msr`], refusing a member whose header asks for more than
+/// `max_bytes` before reading it (see the module doc for what is checked).
+pub fn read_msr_within(path: &Path, max_bytes: u64) -> Result<Msr> {
+    let mut m: HashMap<String, NpyArray> = read_npz_within(path, max_bytes)?.into_iter().collect();
     let bad = |what: String| Error::format(path, what);
     let mut take = |name: &str| {
         m.remove(name)
@@ -203,6 +210,7 @@ pub fn read_msr(path: &Path) -> Result<Msr> {
     let levels = times.0[0]
         .checked_sub(1)
         .ok_or_else(|| bad("member 'times' is empty".into()))?;
+    check_params(&params, levels).map_err(|m| bad(format!("member 'params': {m}")))?;
     let details = f64_array(
         take("details")?,
         "details",
@@ -257,6 +265,9 @@ pub fn read_msr(path: &Path) -> Result<Msr> {
             "member 'phi_voxel': {voxel} is not a positive voxel size"
         )));
     }
+    if let Some(v) = phi.data().iter().find(|v| !v.is_finite()) {
+        return Err(bad(format!("member 'phi' holds {v}")));
+    }
     fn p3(v: &[f64]) -> Vec<Point3<f64>> {
         v.chunks_exact(3)
             .map(|c| Point3::new(c[0], c[1], c[2]))
@@ -294,6 +305,37 @@ pub fn read_msr(path: &Path) -> Result<Msr> {
     })
 }
 
+/// The parameters must describe a decomposition this build can have written: at least one level
+/// and as many as `times` has, a known velocity, positive finite voxel, time and step.
+fn check_params(p: &MsrParams, levels: usize) -> std::result::Result<(), String> {
+    if p.levels == 0 || p.levels != levels {
+        return Err(format!(
+            "levels {} (member 'times' gives {levels}; at least 1)",
+            p.levels
+        ));
+    }
+    if !["mcf", "vpmcf", "expand", "inpaint"].contains(&p.velocity.as_str()) {
+        return Err(format!(
+            "unknown velocity '{}' (expected mcf, vpmcf, expand or inpaint)",
+            p.velocity.chars().take(40).collect::<String>()
+        ));
+    }
+    for (name, v) in [("voxel", p.voxel), ("time", p.time), ("dt", p.dt)] {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(format!("{name} {v} is not positive"));
+        }
+    }
+    for (name, v) in [
+        ("c", p.c),
+        ("projection_tolerance_voxels", p.projection_tolerance_voxels),
+    ] {
+        if !v.is_finite() {
+            return Err(format!("{name} {v} is not finite"));
+        }
+    }
+    Ok(())
+}
+
 fn scalar_i64(a: NpyArray, name: &str) -> std::result::Result<i64, String> {
     match a {
         NpyArray {
@@ -325,8 +367,15 @@ fn f64_array(
             }
             Ok((shape, v))
         }
-        NpyArray { shape, .. } => Err(format!(
-            "member '{name}' is not a float64 array of shape {want:?} (found shape {shape:?})"
-        )),
+        NpyArray { shape, .. } => {
+            let want: Vec<String> = want
+                .iter()
+                .map(|w| w.map_or("any".to_string(), |n| n.to_string()))
+                .collect();
+            Err(format!(
+                "member '{name}' is not a float64 array of shape ({}) (found shape {shape:?})",
+                want.join(", ")
+            ))
+        }
     }
 }

@@ -270,6 +270,10 @@ fn sphere_solid_angle_inside(winding: &WindingNumber, ball: &Ball, sign: f64) ->
             let [a, b, c] = f.map(|i| corners[i as usize]);
             sphere_triangle(winding, ball, sign, [a, b, c], base_reach, 0)
         })
+        // Summed in face order (not by rayon's split, which follows the thread count), so the
+        // figure is the same bits for every --threads.
+        .collect::<Vec<f64>>()
+        .iter()
         .sum()
 }
 

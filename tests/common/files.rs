@@ -1,9 +1,19 @@
 //! Hand-made mesh files for the reader and CLI tests: binary STL bytes built field by field (so a
-//! test can lie about the triangle count or put "solid" in the header), and writing bytes into a
-//! test folder.
+//! test can lie about the triangle count or put "solid" in the header), writing bytes into a
+//! test folder, and listing what a folder holds.
 
 use std::path::{Path, PathBuf};
 use vesselmsr::TriMesh;
+
+/// The names in `dir` (hidden ones too), sorted: what a command left behind.
+pub fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
 
 /// Writes `bytes` to `dir/name` and returns the path.
 pub fn write_file(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {

@@ -1,6 +1,6 @@
 //! Test shapes built on `vesselmsr::mesh::primitives`: the cube [lo, hi]³, whole or with one
 //! side left open; an octahedron with coordinates f32 cannot hold (for the formats' exactness);
-//! a hole punched in a wall.
+//! a hole punched in a wall; any mesh as a triangle soup.
 
 use nalgebra::Point3;
 use vesselmsr::mesh::primitives::box_mesh;
@@ -59,4 +59,17 @@ pub fn punch_hole(mesh: &TriMesh, center: Point3<f64>, radius: f64) -> TriMesh {
     });
     assert!(holed.num_faces() < mesh.num_faces(), "nothing punched");
     holed
+}
+
+/// `mesh` as a triangle soup: every triangle with its own three corners (no vertex shared).
+pub fn soup_of(mesh: &TriMesh) -> TriMesh {
+    TriMesh::new(
+        mesh.faces
+            .iter()
+            .flat_map(|f| f.map(|v| mesh.vertices[v as usize]))
+            .collect(),
+        (0..mesh.num_faces() as u32)
+            .map(|f| [3 * f, 3 * f + 1, 3 * f + 2])
+            .collect(),
+    )
 }
