@@ -4,13 +4,13 @@
 //! budget (`--max-memory`). Refused with one message naming `--voxel`, the regions and
 //! `--max-memory`.
 //!
-//! The margins mirror those of `inpaint::repair` (kept there as `MARGIN_VOXELS` and the pad of
-//! its lattice); the estimate only has to bound them from above.
+//! The margin is `inpaint::repair::region_margin` plus a voxel, the pad of the whole lattice a
+//! voxel more than the repair's; the estimate only has to bound them from above.
 
 use super::budget;
 use crate::grid::spec::{default_voxel, grid_memory_bytes};
 use crate::inpaint::region::Ball;
-use crate::inpaint::repair::{InpaintMethod, RepairOptions};
+use crate::inpaint::repair::{region_margin, RepairOptions};
 use crate::mesh::measures::{bounding_box, mean_edge_length};
 use crate::TriMesh;
 
@@ -20,8 +20,6 @@ const SUB_BOX_GRIDS: usize = 8;
 /// f32 grids of the whole vessel's lattice held by the fallback re-mesh (φ and the voxelizer's
 /// own), rounded up.
 const WHOLE_GRIDS: usize = 3;
-/// Sub-box margin beyond the balls, voxels (`inpaint::repair`'s `MARGIN_VOXELS`, plus one).
-const MARGIN_VOXELS: f64 = 7.0;
 
 /// Refuses a repair of `mesh` in `balls` whose grids would exceed `max_bytes`.
 pub fn check(
@@ -36,14 +34,8 @@ pub fn check(
         None => default_voxel(mean_edge_length(mesh), (hi - lo).max()),
     };
     let rmax = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
-    let growth = match opts.method {
-        InpaintMethod::Axial => 0.0,
-        _ => opts.speed.unwrap_or(1.0 / rmax) * opts.time.unwrap_or(rmax * rmax),
-    };
-    let margin = match opts.method {
-        InpaintMethod::Axial => MARGIN_VOXELS * h,
-        _ => 0.5 * rmax + MARGIN_VOXELS * h + growth,
-    };
+    // One voxel more than the repair's own margin.
+    let margin = region_margin(opts, balls, h) + h;
     let pad = 5.0 * h + margin + 2.0 * rmax;
     let nodes = |extent: f64| extent / h + 3.0;
     let mut sub = [0.0f64; 3];

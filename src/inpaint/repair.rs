@@ -210,6 +210,20 @@ const AXIAL_CORE_VOXELS: f64 = 3.0;
 /// grazes it and a deeper cut would merge the patch's loops (see `stitch`).
 const STITCH_MARGINS_VOXELS: [f64; 8] = [1.5, 1.0, 0.75, 2.5, 3.5, 0.5, 0.25, 0.0];
 
+/// The sub-box's margin beyond the balls, world units, at voxel `h`: a few voxels, and for the
+/// fills that grow the shape (msr, paper, flow), which move it by up to c·T, room for that too
+/// (R is not known yet; the largest region's radius bounds it from above in practice).
+pub fn region_margin(opts: &RepairOptions, balls: &[Ball], h: f64) -> f64 {
+    let rmax = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
+    match opts.method {
+        InpaintMethod::Axial | InpaintMethod::Centerline => MARGIN_VOXELS * h,
+        _ => {
+            let growth = opts.speed.unwrap_or(1.0 / rmax) * opts.time.unwrap_or(rmax * rmax);
+            0.5 * rmax + MARGIN_VOXELS * h + growth
+        }
+    }
+}
+
 /// Repairs `mesh` inside the union of `balls` (see the module docs). The `centerline` fill
 /// traces the input's centreline first; [`repair_with_centerline`] takes one already traced.
 pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Repair> {
@@ -277,16 +291,7 @@ pub fn repair_with_centerline(
     };
     // The lattice of the whole vessel (so the fallback re-mesh shares the sub-box's nodes).
     let rmax = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
-    // The fills that grow the shape (msr, paper, flow) move it by up to c·T: room for that too
-    // (R is not known yet; the region's radius bounds it from above in practice).
-    let growth = match opts.method {
-        InpaintMethod::Axial | InpaintMethod::Centerline => 0.0,
-        _ => opts.speed.unwrap_or(1.0 / rmax) * opts.time.unwrap_or(rmax * rmax),
-    };
-    let margin = match opts.method {
-        InpaintMethod::Axial | InpaintMethod::Centerline => MARGIN_VOXELS * h,
-        _ => 0.5 * rmax + MARGIN_VOXELS * h + growth,
-    };
+    let margin = region_margin(opts, balls, h);
     // Room for the fills that grow the shape (the sub-box is never clamped by the lattice).
     let pad = 4.0 * h + margin + 2.0 * rmax;
     let origin = lo - Vector3::repeat(pad);
