@@ -18,8 +18,10 @@
 //!    one-sided anchors: two are bridged the same way; three or more (a bifurcation) are each
 //!    continued to the junction point (the centreline's junction inside E, else the point nearest
 //!    to all anchor axes in least squares), end there in a round cap and are joined by a smooth
-//!    minimum of a quarter radius (the fillet of a carina); a single one is
-//!    continued along its own damaged centreline and capped.
+//!    minimum of a quarter radius (the fillet of a carina); a single one beside a vessel that
+//!    crosses D is a side branch, continued to that vessel's curve where its axis meets it and
+//!    joined the same way; a single one alone is continued along its own damaged centreline and
+//!    capped.
 //! 3. **Sections.** Along a curve, a rotation-minimising frame (double reflection, Wang, Jüttler,
 //!    Zheng and Liu 2008) is carried from the first anchor; the section at arc-length fraction w
 //!    is (1 − w)·ρ_A(θ) + w·ρ_B(θ), both profiles read in the carried frame, so a tapering or
@@ -366,6 +368,27 @@ fn plan_group(
     }
     match single.len() {
         0 => {}
+        1 if !tubes.is_empty() => {
+            // A side branch joining a vessel that crosses D: continued to the point of that
+            // vessel's curve nearest to its axis, capped there, joined by the fillet.
+            let a = stubs[single[0]].anchor;
+            let j = tubes
+                .iter()
+                .flat_map(|t: &GuideTube| t.points.iter())
+                .min_by(|p, q| {
+                    axis_distance(&a, p).total_cmp(&axis_distance(&a, q))
+                })
+                .copied()
+                .expect("tubes have points");
+            let toward = Anchor {
+                point: j,
+                into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
+                radius: a.radius,
+            };
+            let pts = hermite(&a, &toward, spacing);
+            tubes.push(make_tube(bvh, pts, &a, None, EndCap::Open, EndCap::Round, opts));
+            kinds.push(GuideKind::Junction);
+        }
         1 => {
             // A dead end: continued along its own (damaged) centreline, capped.
             let st = &stubs[single[0]];
@@ -429,6 +452,13 @@ struct Stub {
     outside: f64,
     run: Vec<Point3<f64>>,
     partner: Option<usize>,
+}
+
+/// Distance from `p` to the half-line from the anchor into D (to the anchor itself behind it).
+fn axis_distance(a: &Anchor, p: &Point3<f64>) -> f64 {
+    let v = p - a.point;
+    let along = v.dot(&a.into).max(0.0);
+    (v - a.into * along).norm()
 }
 
 /// Samples of the cubic Hermite curve from `a` (leaving along a.into) to `b` (arriving against

@@ -4,6 +4,7 @@
 
 pub mod axial;
 pub mod axis;
+pub mod checks;
 pub mod guided;
 pub mod harmonic;
 pub mod holes;

@@ -16,9 +16,13 @@
 //!    distances already).
 //! 4. Mesh: marching cubes of the filled φ; with `keep_outside`, stitch the part deep in D into the
 //!    input's triangles outside D; when that fails (or without `keep_outside`), re-mesh the whole
-//!    vessel with the filled sub-box. Check that the output is closed where the input was.
+//!    vessel with the filled sub-box. The stitched surface is checked first (`checks`: no face
+//!    inside the solid, no long stitch edges, outward, no volume lost in D); a failed check
+//!    re-meshes the whole vessel, with the reason in `Repair::fallback`. Check that the output is
+//!    closed where the input was.
 
 use super::axial::fill_axial;
+use super::checks::check_repaired;
 use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions};
 use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::junction::{fill_junction, Branch};
@@ -503,12 +507,24 @@ pub fn repair_with_centerline(
     let stitch = opts
         .keep_outside
         .then(|| stitch_patch(&cut, &patch, balls, &STITCH_MARGINS_VOXELS.map(|m| m * h)));
+    // The stitched surface is checked (`checks`: no face inside the solid, no long stitch
+    // edges, outward, no volume lost in D) when it is closed; a failed check re-meshes.
+    let stitch = stitch.map(|r| {
+        r.map_err(|e| e.to_string()).and_then(|m| {
+            if cut.open_edges > 0 {
+                return Ok(m);
+            }
+            check_repaired(&m, &closed_input, balls, 3.0 * h)
+                .map(|()| m)
+                .map_err(|e| format!("self-check failed: {e}"))
+        })
+    });
     let stitched = matches!(stitch, Some(Ok(_)));
     let (mesh_out, fallback) = match stitch {
         Some(Ok(m)) => (m, None),
         other => (
             remesh_whole(&closed_input, &psi, &depth, origin, whole_dims, first, h)?,
-            other.and_then(|r| r.err()).map(|e| e.to_string()),
+            other.and_then(|r| r.err()),
         ),
     };
     lap("mesh", &mut timings);
