@@ -5,8 +5,9 @@
 //!   winding number of the output is about 1 just behind it and about 0 just in front of it. A
 //!   slit (two coincident sheets across the lumen, left by a stitch that zipped the wrong rims),
 //!   a fin or a pocket of faces inside the vessel has inside on both sides.
-//! - **No long edges from the stitch.** Near D, no edge longer than [`LONG_EDGE_FACTOR`] times
-//!   the mesh's mean edge (a zipper that closed across the lumen leaves slivers).
+//! - **No long edges from the stitch.** Near D, no edge that the input does not have longer than
+//!   [`LONG_EDGE_FACTOR`] times the input's mean edge and twice its longest edge there (a zipper
+//!   that closed across the lumen leaves slivers).
 //! - **Outward, and nothing taken away.** The enclosed volume is positive, and the volume in each
 //!   ball of D is at least the input's (the damage is missing volume: a repair only adds).
 //!
@@ -21,6 +22,7 @@ use crate::report::stenosis::volume_in_ball_with;
 use crate::TriMesh;
 use nalgebra::Point3;
 use rayon::prelude::*;
+use std::collections::HashSet;
 
 /// An edge near D longer than this many mean edges fails the check.
 pub const LONG_EDGE_FACTOR: f64 = 4.0;
@@ -43,31 +45,54 @@ pub fn check_repaired(
     }
     let near = |p: &Point3<f64>| depth_in(balls, p) > -reach;
     let v = &output.vertices;
+    let key = |a: &Point3<f64>, b: &Point3<f64>| {
+        let (a, b) = (a.coords.map(f64::to_bits), b.coords.map(f64::to_bits));
+        let (a, b) = ((a.x, a.y, a.z), (b.x, b.y, b.z));
+        if a <= b {
+            (a, b)
+        } else {
+            (b, a)
+        }
+    };
+    // The input's own edges (the stitch copies their corners exactly) and their mean length.
+    let mut input_edges = HashSet::new();
     let mut total = 0.0;
-    let mut count = 0usize;
-    for f in &output.faces {
+    for f in &input.faces {
         for e in 0..3 {
-            total += (v[f[(e + 1) % 3] as usize] - v[f[e] as usize]).norm();
-            count += 1;
+            let (a, b) = (&input.vertices[f[e] as usize], &input.vertices[f[(e + 1) % 3] as usize]);
+            if input_edges.insert(key(a, b)) {
+                total += (b - a).norm();
+            }
         }
     }
-    let mean = total / count.max(1) as f64;
+    let mean = total / input_edges.len().max(1) as f64;
     let near_faces: Vec<usize> = (0..output.faces.len())
         .filter(|&i| output.faces[i].iter().any(|&k| near(&v[k as usize])))
         .collect();
+    // A zipper edge spans a rim triangle of the input at most: the limit is the larger of
+    // LONG_EDGE_FACTOR mean edges and twice the longest input edge near D.
+    let longest_near = input
+        .faces
+        .iter()
+        .filter(|f| f.iter().any(|&k| near(&input.vertices[k as usize])))
+        .flat_map(|f| (0..3).map(move |e| (f[e], f[(e + 1) % 3])))
+        .map(|(a, b)| (input.vertices[b as usize] - input.vertices[a as usize]).norm())
+        .fold(0.0, f64::max);
+    let limit = (LONG_EDGE_FACTOR * mean).max(2.0 * longest_near);
     for &i in &near_faces {
         let f = output.faces[i];
         for e in 0..3 {
-            let len = (v[f[(e + 1) % 3] as usize] - v[f[e] as usize]).norm();
-            if len > LONG_EDGE_FACTOR * mean {
+            let (a, b) = (&v[f[e] as usize], &v[f[(e + 1) % 3] as usize]);
+            let len = (b - a).norm();
+            if len > limit && !input_edges.contains(&key(a, b)) {
                 return Err(format!(
-                    "an edge of {len:.4} near D, over {LONG_EDGE_FACTOR} times the mean edge {mean:.4}"
+                    "a new edge of {len:.4} near D (the input's mean edge is {mean:.4}, its longest there {longest_near:.4})"
                 ));
             }
         }
     }
     let winding = WindingNumber::new(output, WindingOptions::default());
-    let eps = 0.1 * mean;
+    let eps = 0.1 * mean.min(reach / 3.0);
     let wrong = near_faces
         .par_iter()
         .filter(|&&i| {
