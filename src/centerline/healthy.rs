@@ -100,7 +100,10 @@ impl HealthyVessel {
     }
 
     /// One ball per lesion of at least `min_degree_pct`: on the centreline at the narrowest point,
-    /// radius 1.5 healthy radii or half the lesion's length plus one healthy radius, the larger.
+    /// radius 1.5 healthy radii or the lesion's length (its width at half depth) plus one healthy
+    /// radius, the larger: a bell-shaped narrowing is down to a sixteenth of its depth one
+    /// half-depth width away from its narrowest point, so the ball reaches healthy wall on both
+    /// sides.
     pub fn lesion_regions(&self, min_degree_pct: f64) -> Vec<Ball> {
         self.lesions
             .iter()
@@ -109,7 +112,7 @@ impl HealthyVessel {
                 let r = 0.5 * l.reference_diameter;
                 Ball {
                     center: Point3::from(l.position),
-                    radius: (1.5 * r).max(0.5 * l.length + r),
+                    radius: (1.5 * r).max(l.length + r),
                 }
             })
             .collect()

@@ -53,8 +53,8 @@ pub struct RepairArgs {
     #[arg(long)]
     pub holes: bool,
     /// Also repair every narrowing the centreline finds of at least P% diameter stenosis
-    /// (default 20): a ball on the centreline at the narrowest point, 1.5 healthy radii or half
-    /// the lesion's length plus one, the larger.
+    /// (default 20): a ball on the centreline at the narrowest point, 1.5 healthy radii or the
+    /// lesion's width at half depth plus one healthy radius, the larger.
     #[arg(long, value_name = "P", num_args = 0..=1, default_missing_value = "20")]
     pub stenoses: Option<f64>,
     /// Voxel size h of the grid around D, world units (default: the voxelize rule on the whole
