@@ -9,7 +9,9 @@
 //!    region: per branch, each maximal run of points inside the enlarged region E (the balls of D
 //!    grown by a clearance of a few voxels). The branch point before the run (and the one after
 //!    it) is an anchor, moved outward along the branch until its cross-section plane is clear of
-//!    D (the section is then intact wall). An anchor has a position, the tangent pointing into
+//!    D (the section is then intact wall; where none is before the branch ends, next to a
+//!    junction, the section is not read: the other anchor's is used, or a circle of the
+//!    narrowest radius walked over). An anchor has a position, the tangent pointing into
 //!    D, and a cross-section: the wall's distance from the centreline point along rays in the
 //!    section plane ([`GuideOptions::rays`] angles), so non-circular vessels keep their shape.
 //! 2. **Curves.** A run with an anchor on both sides (the vessel passes through D) is bridged by
@@ -130,6 +132,9 @@ struct Anchor {
     into: Vector3<f64>,
     /// Inscribed radius there.
     radius: f64,
+    /// Whether its section is clear of D (else the walk stopped at the branch's end or its
+    /// limit: next to a junction, whose section is no tube's).
+    clear: bool,
 }
 
 /// Groups of overlapping balls (indices), in order of their first ball.
@@ -251,19 +256,22 @@ fn plan_group(
                 let start = br.points[from];
                 let sign = if step < 0 { 1.0 } else { -1.0 };
                 let limit = opts.max_walk_radii * br.radius[from].max(h);
+                let mut thinnest = f64::INFINITY;
                 loop {
                     let ku = k as usize;
                     let t = br.tangent[ku] * sign;
                     let next = k + step;
                     let last = next < 0 || next >= n as isize;
-                    if clear(&br.points[ku], &t, br.radius[ku])
-                        || last
-                        || (br.points[ku] - start).norm() > limit
-                    {
+                    thinnest = thinnest.min(br.radius[ku]);
+                    let is_clear = clear(&br.points[ku], &t, br.radius[ku]);
+                    if is_clear || last || (br.points[ku] - start).norm() > limit {
                         return Anchor {
                             point: br.points[ku],
                             into: t,
-                            radius: br.radius[ku],
+                            // Not clear: the narrowest radius walked over (a junction's
+                            // inscribed sphere is wider than either vessel).
+                            radius: if is_clear { br.radius[ku] } else { thinnest },
+                            clear: is_clear,
                         };
                     }
                     k = next;
@@ -384,6 +392,7 @@ fn plan_group(
                 point: j,
                 into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
                 radius: a.radius,
+                clear: false,
             };
             let pts = hermite(&a, &toward, spacing);
             tubes.push(make_tube(bvh, pts, &a, None, EndCap::Open, EndCap::Round, opts));
@@ -434,6 +443,7 @@ fn plan_group(
                     point: j,
                     into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
                     radius: a.radius,
+                    clear: false,
                 };
                 let pts = hermite(a, &toward, spacing);
                 tubes.push(make_tube(bvh, pts, a, None, EndCap::Open, EndCap::Round, opts));
@@ -620,15 +630,29 @@ fn make_tube(
     }
     let total = acc.last().copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
     let weight = acc.iter().map(|s| s / total).collect();
-    let start_profile = read_section(bvh, &points[0], &frames[0], a.radius, opts.rays);
-    let end_profile = match b {
-        Some(b) => read_section(
+    // A section that is not clear of D (next to a junction) is not read: the other end's is
+    // used, or a circle of the anchor's radius.
+    let circle = |r: f64| vec![r; opts.rays.max(8)];
+    let start_read = a
+        .clear
+        .then(|| read_section(bvh, &points[0], &frames[0], a.radius, opts.rays));
+    let end_read = b.filter(|b| b.clear).map(|b| {
+        read_section(
             bvh,
             points.last().expect("points"),
             frames.last().expect("frames"),
             b.radius,
             opts.rays,
-        ),
+        )
+    });
+    let start_profile = start_read
+        .clone()
+        .or_else(|| end_read.clone())
+        .unwrap_or_else(|| circle(a.radius));
+    let end_profile = match b {
+        Some(b) => end_read
+            .or(start_read)
+            .unwrap_or_else(|| circle(b.radius)),
         None => start_profile.clone(),
     };
     GuideTube {
@@ -742,11 +766,13 @@ mod tests {
             point: Point3::new(10.0, 0.0, 0.0),
             into: Vector3::new(0.0, 1.0, 0.0),
             radius: 1.0,
+            clear: true,
         };
         let b = Anchor {
             point: Point3::new(0.0, 10.0, 0.0),
             into: Vector3::new(1.0, 0.0, 0.0),
             radius: 1.0,
+            clear: true,
         };
         let pts = hermite(&a, &b, 0.1);
         let worst = pts
