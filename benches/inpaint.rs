@@ -32,6 +32,16 @@
 //!    rounds' ratios, both sides of a round under the same load); the ratio compares like with like: the
 //!    reference's seconds against our "voxelize" + "fill" phases (which also redistance).
 //!
+//! Measured 2026-12-04 with the `centerline` fill (the default since), load 5–7 (other builds on
+//! both cores), `VESSELMSR_BENCH_METHODS=centerline,axial cargo bench --bench inpaint --
+//! phantoms`: (a) centerline | axial: tube 0.22/−0.32% | 0.22/−0.47%; curved 0.14/+0.01% |
+//! 4.61/+7.46%; bifurcation 1.32/−0.72% | 1.35/−1.10%; stenosis 0.07/−0.67% | 0.14/−1.98%;
+//! occlusion 0.03/−0.13% | 0.04/−0.30%; centerline 0.4–0.6 s a phantom (its centreline included),
+//! every output manifold3d NoError, outward, one component, stitched. (b) (dented real vessels,
+//! before the anchor filters of the final version): centerline median 3.38h / 9.9%, axial 1.91h /
+//! 3.3%: on a dent carved 1.5R deep the damaged centreline sprouts spurs and junctions inside D;
+//! `benches/repair_real.rs` measures the chops as holes, as peers see them.
+//!
 //! Measured 2026-12-02 (2 cores shared, load 2.8–3.9: another job on both cores), with the fill
 //! united with the input, the stitch's shallow cuts, and φ_0's core redistanced by the
 //! closest-point transform ((a) and (b) the same as with the sweeps, to the digits shown):

@@ -95,10 +95,11 @@ fn phantoms_are_restored_within_the_acceptance_bounds() {
         (PhantomKind::Stenosis, 1.5, 0.05),
         (PhantomKind::Occlusion, 1.5, 0.05),
         (PhantomKind::Bifurcation, 1.5, 0.05),
+        (PhantomKind::Curved, 1.5, 0.05),
     ];
     for (kind, hd_bound, vol_bound) in cases {
         let ph = phantom(kind);
-        let r = repaired(&ph, InpaintMethod::Axial);
+        let r = repaired(&ph, InpaintMethod::Centerline);
         let hd = hausdorff_in(&r.mesh, &ph.truth, &ph.regions) / ph.voxel;
         let ve = volume_error_in(&r.mesh, &ph.truth, &ph.regions);
         let damaged_ve = volume_error_in(&ph.damaged, &ph.truth, &ph.regions);
@@ -136,7 +137,7 @@ fn assert_manifold3d(mesh: &TriMesh) {
 fn curved_gap_is_bridged_into_one_tube() {
     let ph = phantom(PhantomKind::Curved);
     assert_eq!(connected_components(&ph.damaged).0, 2);
-    let r = repaired(&ph, InpaintMethod::Axial);
+    let r = repaired(&ph, InpaintMethod::Centerline);
     let ve = volume_error_in(&r.mesh, &ph.truth, &ph.regions);
     let hd = hausdorff_in(&r.mesh, &ph.truth, &ph.regions) / ph.voxel;
     println!(
@@ -144,7 +145,9 @@ fn curved_gap_is_bridged_into_one_tube() {
         100.0 * ve
     );
     assert_eq!(connected_components(&r.mesh).0, 1);
-    assert!(ve.abs() <= 0.10, "volume error {ve}");
+    // The centreline fill follows the bend (the axial one, along the chord, was 4.6h / +7%).
+    assert!(hd <= 1.5, "Hausdorff {hd}h");
+    assert!(ve.abs() <= 0.05, "volume error {ve}");
     assert!(mesh_info(&r.mesh).watertight);
     assert_manifold3d(&r.mesh);
     assert_outside_kept(&ph.damaged, &r.mesh, &ph.regions);

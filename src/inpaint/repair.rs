@@ -29,7 +29,7 @@ use super::junction::{fill_junction, Branch};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{fill_msr, transfer_details, MsrFillOptions};
 use super::region::{deepest_ball, Ball};
-use super::stitch::{cut_out, stitch_patch, CutOut};
+use super::stitch::{cut_out, stitch_patch_checked, CutOut};
 use super::topology::remove_islands;
 use crate::bvh::MeshBvh;
 use crate::centerline::{compute_centerline, Centerline, CenterlineOptions};
@@ -504,20 +504,22 @@ pub fn repair_with_centerline(
     let patch = extract_surface(&psi, &ExtractOptions::default())?;
     // Stitched into the kept triangles, or (without keep_outside, or when that fails) the whole
     // vessel re-meshed.
-    let stitch = opts
-        .keep_outside
-        .then(|| stitch_patch(&cut, &patch, balls, &STITCH_MARGINS_VOXELS.map(|m| m * h)));
-    // The stitched surface is checked (`checks`: no face inside the solid, no long stitch
-    // edges, outward, no volume lost in D) when it is closed; a failed check re-meshes.
-    let stitch = stitch.map(|r| {
-        r.map_err(|e| e.to_string()).and_then(|m| {
-            if cut.open_edges > 0 {
-                return Ok(m);
-            }
-            check_repaired(&m, &closed_input, balls, 3.0 * h)
-                .map(|()| m)
-                .map_err(|e| format!("self-check failed: {e}"))
-        })
+    // Every cut depth is tried until a stitch passes the self-checks (`checks`: no face inside
+    // the solid, no long stitch edges, outward, no volume lost in D; they need a closed result).
+    let stitch = opts.keep_outside.then(|| {
+        stitch_patch_checked(
+            &cut,
+            &patch,
+            balls,
+            &STITCH_MARGINS_VOXELS.map(|m| m * h),
+            |m| {
+                if cut.open_edges > 0 {
+                    return Ok(());
+                }
+                check_repaired(m, &closed_input, balls, 3.0 * h)
+                    .map_err(|e| format!("self-check failed: {e}"))
+            },
+        )
     });
     let stitched = matches!(stitch, Some(Ok(_)));
     let (mesh_out, fallback) = match stitch {

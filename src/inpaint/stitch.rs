@@ -155,16 +155,32 @@ pub fn stitch_patch(
     balls: &[Ball],
     margins: &[f64],
 ) -> Result<TriMesh> {
+    stitch_patch_checked(cut, patch, balls, margins, |_| Ok(()))
+        .map_err(Error::Geometry)
+}
+
+/// [`stitch_patch`] whose result must also pass `check` (a depth whose stitch fails the check
+/// is passed over like one that does not stitch); Err: the first reason met.
+pub fn stitch_patch_checked(
+    cut: &CutOut,
+    patch: &TriMesh,
+    balls: &[Ball],
+    margins: &[f64],
+    check: impl Fn(&TriMesh) -> std::result::Result<(), String>,
+) -> std::result::Result<TriMesh, String> {
     let mut first_error = None;
     for &margin in margins {
-        match stitch_at(cut, patch, balls, margin) {
+        match stitch_at(cut, patch, balls, margin)
+            .map_err(|e| e.to_string())
+            .and_then(|m| check(&m).map(|()| m))
+        {
             Ok(mesh) => return Ok(mesh),
             Err(e) => {
                 first_error.get_or_insert(e);
             }
         }
     }
-    Err(first_error.unwrap_or_else(|| Error::Geometry("stitching: no cut depth given".into())))
+    Err(first_error.unwrap_or_else(|| "stitching: no cut depth given".into()))
 }
 
 /// [`stitch_patch`] with the patch cut at one depth.
