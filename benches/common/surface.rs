@@ -116,15 +116,9 @@ pub fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Median of all the values, infinities included (NaN for none).
-pub fn median_all(mut v: Vec<f64>) -> f64 {
+pub fn median_all(v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
+    vesselmsr::inpaint::region::median(v)
 }

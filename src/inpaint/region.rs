@@ -212,7 +212,7 @@ fn chord_fan(bvh: &MeshBvh, s: &Point3<f64>, inward: &Vector3<f64>, diag: f64) -
 }
 
 /// Median of a non-empty list (mean of the two middle values for an even count).
-fn median(mut v: Vec<f64>) -> f64 {
+pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let m = v.len() / 2;
     if v.len() % 2 == 1 {
