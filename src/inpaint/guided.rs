@@ -346,14 +346,6 @@ fn plan_group(
         }
     }
     let kept: Vec<usize> = (0..stubs.len()).filter(|&i| keep[i]).collect();
-    if std::env::var_os("VMSR_DEBUG").is_some() {
-        for (i, st) in stubs.iter().enumerate() {
-            eprintln!(
-                "stub {i} keep {} at {:?} into {:?} r {:.3} outside {:.2} partner {:?}",
-                keep[i], st.anchor.point, st.anchor.into, st.anchor.radius, st.outside, st.partner
-            );
-        }
-    }
     let mut tubes = Vec::new();
     let mut kinds = Vec::new();
     let spacing = h / opts.samples_per_voxel.max(0.5);

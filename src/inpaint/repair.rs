@@ -57,7 +57,8 @@ pub enum InpaintMethod {
     /// interpolated between the intact sections on either side (`guided`); regions no vessel
     /// passes through fall back to `axial`.
     Centerline,
-    /// `axial`: φ_0 carried across D along the vessel axis (`axial`), the winner on the phantoms.
+    /// `axial`: φ_0 carried across D along a straight vessel axis (`axial`); also the fallback of
+    /// `centerline` where no vessel passes through D.
     Axial,
     /// `msr`: one coarse level of v = c + κ_a − κ plus the details transferred harmonically
     /// (`msr_fill`).
