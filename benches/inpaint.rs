@@ -606,7 +606,8 @@ fn real(dir: &Path, reference: Option<&Reference>) {
                 // The case's inputs, to repeat one by hand.
                 let dir = Path::new(&dir);
                 let _ = std::fs::create_dir_all(dir);
-                let _ = vesselmsr::io::write_mesh(&dir.join(format!("{case}.damaged.stl")), &damaged);
+                let _ =
+                    vesselmsr::io::write_mesh(&dir.join(format!("{case}.damaged.stl")), &damaged);
                 let _ = vesselmsr::io::write_mesh(&dir.join(format!("{case}.truth.stl")), &truth);
                 let _ = vesselmsr::inpaint::region::write_regions(
                     &dir.join(format!("{case}.regions.json")),

@@ -9,9 +9,9 @@ use super::{print_json, progress, Context};
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
 use crate::centerline::{compute_centerline, CenterlineOptions};
+use crate::inpaint::guided::GuideKind;
 use crate::inpaint::holes::{classify_loops, hole_regions, LoopKind, LoopOptions};
 use crate::inpaint::region::{parse_ball, read_regions, Ball};
-use crate::inpaint::guided::GuideKind;
 use crate::inpaint::repair::{repair_with_centerline, InpaintMethod, Repair, RepairOptions};
 use crate::io::{read_mesh, write_atomic, write_mesh, MeshFormat};
 use crate::mesh::cap::{cap_holes, CapOptions};
@@ -334,7 +334,12 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
     let mut result = if nothing_to_do {
         unrepaired(&mesh, &opts)
     } else {
-        repair_with_centerline(&mesh, &balls, &opts, healthy.as_ref().map(|h| &h.centerline))
+        repair_with_centerline(
+            &mesh,
+            &balls,
+            &opts,
+            healthy.as_ref().map(|h| &h.centerline),
+        )
     }
     .with_context(|| format!("{}: repair failed", args.mesh.display()))?;
     let decimate = match args.decimate {

@@ -41,7 +41,9 @@ pub fn check_repaired(
 ) -> Result<(), String> {
     let volume = signed_volume(output);
     if !(volume > 0.0) {
-        return Err(format!("the repaired surface encloses a volume of {volume:.4} (not outward)"));
+        return Err(format!(
+            "the repaired surface encloses a volume of {volume:.4} (not outward)"
+        ));
     }
     let near = |p: &Point3<f64>| depth_in(balls, p) > -reach;
     let v = &output.vertices;
@@ -59,7 +61,10 @@ pub fn check_repaired(
     let mut total = 0.0;
     for f in &input.faces {
         for e in 0..3 {
-            let (a, b) = (&input.vertices[f[e] as usize], &input.vertices[f[(e + 1) % 3] as usize]);
+            let (a, b) = (
+                &input.vertices[f[e] as usize],
+                &input.vertices[f[(e + 1) % 3] as usize],
+            );
             if input_edges.insert(key(a, b)) {
                 total += (b - a).norm();
             }
@@ -161,7 +166,12 @@ mod tests {
         let s = icosphere(3, 1.0, Point3::origin());
         let mut slit = s.clone();
         let base = slit.vertices.len() as u32;
-        for p in [[0.6, -0.1, -0.1], [0.6, 0.1, -0.1], [0.6, 0.1, 0.1], [0.6, -0.1, 0.1]] {
+        for p in [
+            [0.6, -0.1, -0.1],
+            [0.6, 0.1, -0.1],
+            [0.6, 0.1, 0.1],
+            [0.6, -0.1, 0.1],
+        ] {
             slit.vertices.push(Point3::new(p[0], p[1], p[2]));
         }
         for f in [[0, 1, 2], [0, 2, 3], [0, 2, 1], [0, 3, 2]] {

@@ -330,7 +330,11 @@ fn plan_group(
     let towards_d = |a: &Anchor| {
         balls
             .iter()
-            .map(|b| (b.center - a.point).try_normalize(1e-12).map_or(0.0, |d| d.dot(&a.into)))
+            .map(|b| {
+                (b.center - a.point)
+                    .try_normalize(1e-12)
+                    .map_or(0.0, |d| d.dot(&a.into))
+            })
             .fold(f64::NEG_INFINITY, f64::max)
     };
     for a in 0..stubs.len() {
@@ -375,9 +379,7 @@ fn plan_group(
             let j = tubes
                 .iter()
                 .flat_map(|t: &GuideTube| t.points.iter())
-                .min_by(|p, q| {
-                    axis_distance(&a, p).total_cmp(&axis_distance(&a, q))
-                })
+                .min_by(|p, q| axis_distance(&a, p).total_cmp(&axis_distance(&a, q)))
                 .copied()
                 .expect("tubes have points");
             let toward = Anchor {
@@ -387,7 +389,15 @@ fn plan_group(
                 clear: false,
             };
             let pts = hermite(&a, &toward, spacing);
-            tubes.push(make_tube(bvh, pts, &a, None, EndCap::Open, EndCap::Round, opts));
+            tubes.push(make_tube(
+                bvh,
+                pts,
+                &a,
+                None,
+                EndCap::Open,
+                EndCap::Round,
+                opts,
+            ));
             kinds.push(GuideKind::Junction);
         }
         1 => {
@@ -396,7 +406,15 @@ fn plan_group(
             let mut pts = vec![st.anchor.point];
             pts.extend(st.run.iter().copied());
             let pts = resample(&pts, spacing);
-            tubes.push(make_tube(bvh, pts, &st.anchor, None, EndCap::Open, EndCap::Round, opts));
+            tubes.push(make_tube(
+                bvh,
+                pts,
+                &st.anchor,
+                None,
+                EndCap::Open,
+                EndCap::Round,
+                opts,
+            ));
             kinds.push(GuideKind::DeadEnd);
         }
         2 => {
@@ -438,7 +456,15 @@ fn plan_group(
                     clear: false,
                 };
                 let pts = hermite(a, &toward, spacing);
-                tubes.push(make_tube(bvh, pts, a, None, EndCap::Open, EndCap::Round, opts));
+                tubes.push(make_tube(
+                    bvh,
+                    pts,
+                    a,
+                    None,
+                    EndCap::Open,
+                    EndCap::Round,
+                    opts,
+                ));
                 kinds.push(GuideKind::Junction);
             }
         }
@@ -509,7 +535,11 @@ fn resample(pts: &[Point3<f64>], spacing: f64) -> Vec<Point3<f64>> {
             seg += 1;
         }
         let l = (pts[seg + 1] - pts[seg]).norm();
-        let f = if l > 0.0 { ((target - acc) / l).clamp(0.0, 1.0) } else { 0.0 };
+        let f = if l > 0.0 {
+            ((target - acc) / l).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         out.push(pts[seg] + (pts[seg + 1] - pts[seg]) * f);
     }
     out.push(*pts.last().expect("non-empty"));
@@ -570,14 +600,22 @@ fn frames(pts: &[Point3<f64>], t0: &Vector3<f64>) -> Vec<[Vector3<f64>; 3]> {
 /// The wall's distance from `c` along `rays` directions in the plane of `frame` (angles 2πj/rays
 /// from frame[1] towards frame[2]); misses and outliers (beyond 4 radii) are interpolated from
 /// their neighbours; a circle of `radius` when most rays fail.
-fn read_section(bvh: &MeshBvh, c: &Point3<f64>, frame: &[Vector3<f64>; 3], radius: f64, rays: usize) -> Vec<f64> {
+fn read_section(
+    bvh: &MeshBvh,
+    c: &Point3<f64>,
+    frame: &[Vector3<f64>; 3],
+    radius: f64,
+    rays: usize,
+) -> Vec<f64> {
     let rays = rays.max(8);
     let reach = 4.0 * radius;
     let raw: Vec<Option<f64>> = (0..rays)
         .map(|j| {
             let th = TAU * j as f64 / rays as f64;
             let d = frame[1] * th.cos() + frame[2] * th.sin();
-            bvh.cast_ray(c, &d, reach).map(|hit| hit.t).filter(|t| *t > 0.0)
+            bvh.cast_ray(c, &d, reach)
+                .map(|hit| hit.t)
+                .filter(|t| *t > 0.0)
         })
         .collect();
     let good = raw.iter().filter(|r| r.is_some()).count();
@@ -642,9 +680,7 @@ fn make_tube(
         .or_else(|| end_read.clone())
         .unwrap_or_else(|| circle(a.radius));
     let end_profile = match b {
-        Some(b) => end_read
-            .or(start_read)
-            .unwrap_or_else(|| circle(b.radius)),
+        Some(b) => end_read.or(start_read).unwrap_or_else(|| circle(b.radius)),
         None => start_profile.clone(),
     };
     GuideTube {

@@ -22,9 +22,9 @@
 //!    closed where the input was.
 
 use super::axial::fill_axial;
+use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::checks::check_repaired;
 use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions};
-use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::junction::{fill_junction, Branch};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{fill_msr, transfer_details, MsrFillOptions};
@@ -492,7 +492,10 @@ pub fn repair_with_centerline(
     remove_islands(&mut psi, &unknown);
     // Marching cubes needs distances near the surface only. The axial and centreline fills
     // give distances, which are already that; the flows' and msr's fields are redistanced first.
-    if !matches!(opts.method, InpaintMethod::Axial | InpaintMethod::Centerline) {
+    if !matches!(
+        opts.method,
+        InpaintMethod::Axial | InpaintMethod::Centerline
+    ) {
         redistance(
             &mut psi,
             &RedistanceOptions {
@@ -609,8 +612,7 @@ fn fill_axial_regions(
         let branches: Vec<Branch> = mine
             .iter()
             .map(|c| {
-                let fit =
-                    fit_cylinder(closed_input, balls, &c.center, 2.0 * radius_estimate);
+                let fit = fit_cylinder(closed_input, balls, &c.center, 2.0 * radius_estimate);
                 match fit {
                     Some((center, axis, radius)) => Branch {
                         center,

@@ -155,8 +155,7 @@ pub fn stitch_patch(
     balls: &[Ball],
     margins: &[f64],
 ) -> Result<TriMesh> {
-    stitch_patch_checked(cut, patch, balls, margins, |_| Ok(()))
-        .map_err(Error::Geometry)
+    stitch_patch_checked(cut, patch, balls, margins, |_| Ok(())).map_err(Error::Geometry)
 }
 
 /// [`stitch_patch`] whose result must also pass `check` (a depth whose stitch fails the check

@@ -13,8 +13,8 @@ pub mod measures;
 pub mod orient;
 pub mod primitives;
 pub mod topology;
-pub mod units;
 mod trimesh;
+pub mod units;
 pub mod weld;
 
 pub use trimesh::TriMesh;

@@ -230,9 +230,8 @@ pub(super) fn assign_signs(
                 (k > 0).then(|| base - layer_len),
                 (k + 1 < nz).then(|| base + layer_len),
             ];
-            let differs = move |a: usize, b: usize| {
-                (state_ro[a] ^ state_ro[b]) & NEG != 0 && free(a, b)
-            };
+            let differs =
+                move |a: usize, b: usize| (state_ro[a] ^ state_ro[b]) & NEG != 0 && free(a, b);
             (0..nx).filter_map(move |i| {
                 let a = base + i;
                 if state_ro[a] & EVAL != 0 {

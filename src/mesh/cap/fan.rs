@@ -19,9 +19,9 @@ pub fn cap_loops_with_fans(mesh: &TriMesh, loops: &[Vec<u32>]) -> TriMesh {
         .collect();
     let mut out = mesh.clone();
     for lp in loops.iter().filter(|l| l.len() >= 3) {
-        let sum = lp
-            .iter()
-            .fold(nalgebra::Vector3::zeros(), |s, &v| s + mesh.vertices[v as usize].coords);
+        let sum = lp.iter().fold(nalgebra::Vector3::zeros(), |s, &v| {
+            s + mesh.vertices[v as usize].coords
+        });
         let c = out.vertices.len() as u32;
         out.vertices.push(Point3::from(sum / lp.len() as f64));
         // The mesh traverses a–b along the loop's order: the fan goes b–a.
