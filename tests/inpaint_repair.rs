@@ -432,3 +432,33 @@ fn real_coronary_stenosis_gets_a_tube_like_lumen_and_a_degree() {
     let out = g.output_diameter_at_min.unwrap();
     assert!((2.0..3.2).contains(&out), "restored diameter {out} mm");
 }
+
+#[test]
+fn an_inward_input_is_turned_outward_and_repaired() {
+    // The stenosis phantom with every triangle flipped (as aorta_abdominal_capped is stored):
+    // the repair faces outward, says so, and restores the same volume as from the outward input.
+    let ph = phantom(PhantomKind::Stenosis);
+    let mut inward = ph.damaged.clone();
+    inward.flip_faces();
+    assert!(mesh_info(&inward).signed_volume < 0.0);
+    let opts = RepairOptions {
+        voxel: Some(ph.voxel),
+        ..RepairOptions::default()
+    };
+    let r = repair(&inward, &ph.regions, &opts).unwrap();
+    let info = mesh_info(&r.mesh);
+    assert!(info.watertight && info.signed_volume > 0.0);
+    assert!(
+        r.notices.iter().any(|n| n.contains("faced inward")),
+        "{:?}",
+        r.notices
+    );
+    let hd = hausdorff_in(&r.mesh, &ph.truth, &ph.regions) / ph.voxel;
+    let ve = volume_error_in(&r.mesh, &ph.truth, &ph.regions);
+    println!(
+        "inward stenosis: Hausdorff in D {hd:.2}h, volume error in D {:+.2}%",
+        100.0 * ve
+    );
+    assert!(hd <= 1.5 && ve.abs() <= 0.05, "{hd}h, {ve}");
+    assert!(r.stitched, "{:?}", r.fallback);
+}
