@@ -118,11 +118,16 @@ pub fn compute_centerline(
     // crossings are exact and several times cheaper than the winding number of an open mesh;
     // the fans are planar enough where the winding number's own closure would be). The curve is
     // refined on the mesh itself.
-    let end_loops: Vec<Vec<u32>> = loops
-        .iter()
-        .filter(|l| l.kind == LoopKind::End && holes == 0)
-        .map(|l| l.vertices.clone())
-        .collect();
+    // With holes, `mesh` is already the capped input: every loop, ends included, is closed.
+    let end_loops: Vec<Vec<u32>> = if holes > 0 {
+        Vec::new()
+    } else {
+        loops
+            .iter()
+            .filter(|l| l.kind == LoopKind::End)
+            .map(|l| l.vertices.clone())
+            .collect()
+    };
     let fanned;
     let closed = if end_loops.is_empty() {
         mesh

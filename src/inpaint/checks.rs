@@ -17,7 +17,7 @@
 
 use super::region::{depth_in, Ball};
 use crate::bvh::{WindingNumber, WindingOptions};
-use crate::mesh::measures::signed_volume;
+use crate::mesh::measures::{mean_edge_length, signed_volume};
 use crate::report::stenosis::volume_in_ball_with;
 use crate::TriMesh;
 use nalgebra::Point3;
@@ -31,106 +31,143 @@ pub const LONG_EDGE_FACTOR: f64 = 4.0;
 /// fraction of the faces checked (thin features narrower than the probe offset).
 const SIDE_TOLERANCE: f64 = 0.002;
 
+/// An undirected edge by the exact bits of its corners (the stitch copies the input's corners
+/// exactly, so an input edge in the output has the same key).
+type EdgeKey = ((u64, u64, u64), (u64, u64, u64));
+
+fn edge_key(a: &Point3<f64>, b: &Point3<f64>) -> EdgeKey {
+    let (a, b) = (a.coords.map(f64::to_bits), b.coords.map(f64::to_bits));
+    let (a, b) = ((a.x, a.y, a.z), (b.x, b.y, b.z));
+    if a <= b {
+        (a, b)
+    } else {
+        (b, a)
+    }
+}
+
+/// What the checks need of the input, measured once for every surface checked against it
+/// (`repair` checks one stitch per cut depth it tries).
+pub struct RepairChecks<'a> {
+    balls: &'a [Ball],
+    /// Faces and edges within this distance outside D are checked, world units.
+    reach: f64,
+    input_edges: HashSet<EdgeKey>,
+    /// The input's mean edge and its longest edge near D, world units.
+    mean: f64,
+    longest_near: f64,
+    /// The input's volume inside each ball.
+    input_volumes: Vec<f64>,
+}
+
+impl<'a> RepairChecks<'a> {
+    /// The checks of surfaces repaired from `input` (the closed input) in `balls`, around the
+    /// balls grown by `reach` (world units).
+    pub fn new(input: &TriMesh, balls: &'a [Ball], reach: f64) -> Self {
+        let near = |k: u32| depth_in(balls, &input.vertices[k as usize]) > -reach;
+        let mut input_edges = HashSet::new();
+        let mut longest_near: f64 = 0.0;
+        for f in &input.faces {
+            let touches = f.iter().any(|&k| near(k));
+            for e in 0..3 {
+                let (a, b) = (
+                    &input.vertices[f[e] as usize],
+                    &input.vertices[f[(e + 1) % 3] as usize],
+                );
+                input_edges.insert(edge_key(a, b));
+                if touches {
+                    longest_near = longest_near.max((b - a).norm());
+                }
+            }
+        }
+        let winding = WindingNumber::new(input, WindingOptions::default());
+        RepairChecks {
+            balls,
+            reach,
+            input_edges,
+            mean: mean_edge_length(input),
+            longest_near,
+            input_volumes: balls
+                .iter()
+                .map(|b| volume_in_ball_with(input, &winding, b))
+                .collect(),
+        }
+    }
+
+    /// Checks `output` (the repaired, closed surface). Err names the first check that failed.
+    pub fn check(&self, output: &TriMesh) -> Result<(), String> {
+        let (mean, longest_near) = (self.mean, self.longest_near);
+        let volume = signed_volume(output);
+        if !(volume > 0.0) {
+            return Err(format!(
+                "the repaired surface encloses a volume of {volume:.4} (not outward)"
+            ));
+        }
+        let v = &output.vertices;
+        let near_faces: Vec<usize> = (0..output.faces.len())
+            .filter(|&i| {
+                output.faces[i]
+                    .iter()
+                    .any(|&k| depth_in(self.balls, &v[k as usize]) > -self.reach)
+            })
+            .collect();
+        // A zipper edge spans a rim triangle of the input at most: the limit is the larger of
+        // LONG_EDGE_FACTOR mean edges and twice the longest input edge near D.
+        let limit = (LONG_EDGE_FACTOR * mean).max(2.0 * longest_near);
+        for &i in &near_faces {
+            let f = output.faces[i];
+            for e in 0..3 {
+                let (a, b) = (&v[f[e] as usize], &v[f[(e + 1) % 3] as usize]);
+                let len = (b - a).norm();
+                if len > limit && !self.input_edges.contains(&edge_key(a, b)) {
+                    return Err(format!(
+                        "a new edge of {len:.4} near D (the input's mean edge is {mean:.4}, its longest there {longest_near:.4})"
+                    ));
+                }
+            }
+        }
+        let winding = WindingNumber::new(output, WindingOptions::default());
+        let eps = 0.1 * mean.min(self.reach / 3.0);
+        let wrong = near_faces
+            .par_iter()
+            .filter(|&&i| {
+                let [a, b, c] = output.faces[i].map(|k| v[k as usize]);
+                let Some(n) = (b - a).cross(&(c - a)).try_normalize(1e-300) else {
+                    return false;
+                };
+                let p = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+                let front = winding.winding_number(&(p + n * eps));
+                let back = winding.winding_number(&(p - n * eps));
+                !(front < 0.5 && back >= 0.5)
+            })
+            .count();
+        if wrong as f64 > SIDE_TOLERANCE * near_faces.len() as f64 {
+            return Err(format!(
+                "{wrong} of the {} faces near D do not separate inside from outside (a slit, fin or pocket inside the vessel)",
+                near_faces.len()
+            ));
+        }
+        for (k, (ball, &before)) in self.balls.iter().zip(&self.input_volumes).enumerate() {
+            let after = volume_in_ball_with(output, &winding, ball);
+            if after < before - 1e-3 * before.abs().max(ball.radius.powi(3)) {
+                return Err(format!(
+                    "region {} holds less volume after the repair ({after:.4}) than before ({before:.4})",
+                    k + 1
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Checks `output` (the repaired, closed surface) against `input` (the closed input) around the
-/// balls of D grown by `reach` (world units). Err names the first check that failed.
+/// balls of D grown by `reach` (world units): [`RepairChecks`] for one surface.
 pub fn check_repaired(
     output: &TriMesh,
     input: &TriMesh,
     balls: &[Ball],
     reach: f64,
 ) -> Result<(), String> {
-    let volume = signed_volume(output);
-    if !(volume > 0.0) {
-        return Err(format!(
-            "the repaired surface encloses a volume of {volume:.4} (not outward)"
-        ));
-    }
-    let near = |p: &Point3<f64>| depth_in(balls, p) > -reach;
-    let v = &output.vertices;
-    let key = |a: &Point3<f64>, b: &Point3<f64>| {
-        let (a, b) = (a.coords.map(f64::to_bits), b.coords.map(f64::to_bits));
-        let (a, b) = ((a.x, a.y, a.z), (b.x, b.y, b.z));
-        if a <= b {
-            (a, b)
-        } else {
-            (b, a)
-        }
-    };
-    // The input's own edges (the stitch copies their corners exactly) and their mean length.
-    let mut input_edges = HashSet::new();
-    let mut total = 0.0;
-    for f in &input.faces {
-        for e in 0..3 {
-            let (a, b) = (
-                &input.vertices[f[e] as usize],
-                &input.vertices[f[(e + 1) % 3] as usize],
-            );
-            if input_edges.insert(key(a, b)) {
-                total += (b - a).norm();
-            }
-        }
-    }
-    let mean = total / input_edges.len().max(1) as f64;
-    let near_faces: Vec<usize> = (0..output.faces.len())
-        .filter(|&i| output.faces[i].iter().any(|&k| near(&v[k as usize])))
-        .collect();
-    // A zipper edge spans a rim triangle of the input at most: the limit is the larger of
-    // LONG_EDGE_FACTOR mean edges and twice the longest input edge near D.
-    let longest_near = input
-        .faces
-        .iter()
-        .filter(|f| f.iter().any(|&k| near(&input.vertices[k as usize])))
-        .flat_map(|f| (0..3).map(move |e| (f[e], f[(e + 1) % 3])))
-        .map(|(a, b)| (input.vertices[b as usize] - input.vertices[a as usize]).norm())
-        .fold(0.0, f64::max);
-    let limit = (LONG_EDGE_FACTOR * mean).max(2.0 * longest_near);
-    for &i in &near_faces {
-        let f = output.faces[i];
-        for e in 0..3 {
-            let (a, b) = (&v[f[e] as usize], &v[f[(e + 1) % 3] as usize]);
-            let len = (b - a).norm();
-            if len > limit && !input_edges.contains(&key(a, b)) {
-                return Err(format!(
-                    "a new edge of {len:.4} near D (the input's mean edge is {mean:.4}, its longest there {longest_near:.4})"
-                ));
-            }
-        }
-    }
-    let winding = WindingNumber::new(output, WindingOptions::default());
-    let eps = 0.1 * mean.min(reach / 3.0);
-    let wrong = near_faces
-        .par_iter()
-        .filter(|&&i| {
-            let f = output.faces[i];
-            let [a, b, c] = f.map(|k| v[k as usize]);
-            let n = (b - a).cross(&(c - a));
-            let Some(n) = n.try_normalize(1e-300) else {
-                return false;
-            };
-            let p = Point3::from((a.coords + b.coords + c.coords) / 3.0);
-            let front = winding.winding_number(&(p + n * eps));
-            let back = winding.winding_number(&(p - n * eps));
-            !(front < 0.5 && back >= 0.5)
-        })
-        .count();
-    if wrong as f64 > SIDE_TOLERANCE * near_faces.len() as f64 {
-        return Err(format!(
-            "{wrong} of the {} faces near D do not separate inside from outside (a slit, fin or pocket inside the vessel)",
-            near_faces.len()
-        ));
-    }
-    let input_winding = WindingNumber::new(input, WindingOptions::default());
-    for (k, ball) in balls.iter().enumerate() {
-        let before = volume_in_ball_with(input, &input_winding, ball);
-        let after = volume_in_ball_with(output, &winding, ball);
-        if after < before - 1e-3 * before.abs().max(ball.radius.powi(3)) {
-            return Err(format!(
-                "region {} holds less volume after the repair ({after:.4}) than before ({before:.4})",
-                k + 1
-            ));
-        }
-    }
-    Ok(())
+    RepairChecks::new(input, balls, reach).check(output)
 }
 
 #[cfg(test)]

@@ -93,7 +93,7 @@ pub struct GuideTube {
     pub start_profile: Vec<f64>,
     /// Section radii at the last sample, same angles, in the carried frame there.
     pub end_profile: Vec<f64>,
-    pub start_cap: EndCap,
+    /// How the last sample ends the tube (the first is always an anchor: open).
     pub end_cap: EndCap,
 }
 
@@ -355,7 +355,7 @@ fn plan_group(
     let spacing = h / opts.samples_per_voxel.max(0.5);
     let bridge = |a: &Anchor, b: &Anchor| {
         let pts = hermite(a, b, spacing);
-        make_tube(bvh, pts, a, Some(b), EndCap::Open, EndCap::Open, opts)
+        make_tube(bvh, pts, a, Some(b), EndCap::Open, opts)
     };
     // A run through E joins its two anchors (a vessel crossing D, or clipped by it); the
     // anchors left over are the vessel's ends inside D, joined below.
@@ -389,15 +389,7 @@ fn plan_group(
                 clear: false,
             };
             let pts = hermite(&a, &toward, spacing);
-            tubes.push(make_tube(
-                bvh,
-                pts,
-                &a,
-                None,
-                EndCap::Open,
-                EndCap::Round,
-                opts,
-            ));
+            tubes.push(make_tube(bvh, pts, &a, None, EndCap::Round, opts));
             kinds.push(GuideKind::Junction);
         }
         1 => {
@@ -406,15 +398,7 @@ fn plan_group(
             let mut pts = vec![st.anchor.point];
             pts.extend(st.run.iter().copied());
             let pts = resample(&pts, spacing);
-            tubes.push(make_tube(
-                bvh,
-                pts,
-                &st.anchor,
-                None,
-                EndCap::Open,
-                EndCap::Round,
-                opts,
-            ));
+            tubes.push(make_tube(bvh, pts, &st.anchor, None, EndCap::Round, opts));
             kinds.push(GuideKind::DeadEnd);
         }
         2 => {
@@ -456,15 +440,7 @@ fn plan_group(
                     clear: false,
                 };
                 let pts = hermite(a, &toward, spacing);
-                tubes.push(make_tube(
-                    bvh,
-                    pts,
-                    a,
-                    None,
-                    EndCap::Open,
-                    EndCap::Round,
-                    opts,
-                ));
+                tubes.push(make_tube(bvh, pts, a, None, EndCap::Round, opts));
                 kinds.push(GuideKind::Junction);
             }
         }
@@ -649,7 +625,6 @@ fn make_tube(
     points: Vec<Point3<f64>>,
     a: &Anchor,
     b: Option<&Anchor>,
-    start_cap: EndCap,
     end_cap: EndCap,
     opts: &GuideOptions,
 ) -> GuideTube {
@@ -689,7 +664,6 @@ fn make_tube(
         weight,
         start_profile,
         end_profile,
-        start_cap,
         end_cap,
     }
 }
@@ -730,8 +704,7 @@ impl GuideTube {
         let v = x - self.points[i];
         let along = v.dot(&t);
         let last = i + 1 == self.points.len();
-        let beyond = (i == 0 && along < 0.0 && self.start_cap == EndCap::Round)
-            || (last && along > 0.0 && self.end_cap == EndCap::Round);
+        let beyond = last && along > 0.0 && self.end_cap == EndCap::Round;
         if beyond {
             return v.norm() - self.mean_radius(last);
         }

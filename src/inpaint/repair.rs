@@ -23,7 +23,7 @@
 
 use super::axial::fill_axial;
 use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
-use super::checks::check_repaired;
+use super::checks::RepairChecks;
 use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions};
 use super::junction::{fill_junction, Branch};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
@@ -507,21 +507,20 @@ pub fn repair_with_centerline(
     lap("fill", &mut timings);
     let patch = extract_surface(&psi, &ExtractOptions::default())?;
     // Stitched into the kept triangles, or (without keep_outside, or when that fails) the whole
-    // vessel re-meshed.
-    // Every cut depth is tried until a stitch passes the self-checks (`checks`: no face inside
-    // the solid, no long stitch edges, outward, no volume lost in D; they need a closed result).
+    // vessel re-meshed. Every cut depth is tried until a stitch passes the self-checks
+    // (`checks`: no face inside the solid, no long stitch edges, outward, no volume lost in D;
+    // they need a closed result).
     let stitch = opts.keep_outside.then(|| {
+        let checks =
+            (cut.open_edges == 0).then(|| RepairChecks::new(&closed_input, balls, 3.0 * h));
         stitch_patch_checked(
             &cut,
             &patch,
             balls,
             &STITCH_MARGINS_VOXELS.map(|m| m * h),
-            |m| {
-                if cut.open_edges > 0 {
-                    return Ok(());
-                }
-                check_repaired(m, &closed_input, balls, 3.0 * h)
-                    .map_err(|e| format!("self-check failed: {e}"))
+            |m| match &checks {
+                Some(c) => c.check(m).map_err(|e| format!("self-check failed: {e}")),
+                None => Ok(()),
             },
         )
     });
