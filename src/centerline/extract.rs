@@ -98,7 +98,13 @@ pub fn compute_centerline(
     let holes = loops.iter().filter(|l| l.kind == LoopKind::Hole).count();
     let capped;
     let mesh = if holes > 0 {
-        let (m, _) = cap_holes(mesh, &CapOptions::default())?;
+        // The ends by fans (as below), the holes by the cap that follows the wall.
+        let ends: Vec<Vec<u32>> = loops
+            .iter()
+            .filter(|l| l.kind == LoopKind::End)
+            .map(|l| l.vertices.clone())
+            .collect();
+        let (m, _) = cap_holes(&cap_loops_with_fans(mesh, &ends), &CapOptions::default())?;
         notices.push(format!(
             "{holes} hole(s) in the wall capped before the centreline was traced"
         ));

@@ -95,7 +95,13 @@ pub struct GuideTube {
     pub end_profile: Vec<f64>,
     /// How the last sample ends the tube (the first is always an anchor: open).
     pub end_cap: EndCap,
+    /// Bounding spheres (centre, radius) of runs of [`CHUNK`] consecutive samples, for the
+    /// nearest-sample search.
+    chunks: Vec<(Point3<f64>, f64)>,
 }
+
+/// Curve samples per bounding sphere of [`GuideTube::distance`]'s search.
+const CHUNK: usize = 16;
 
 /// What the centreline gave for one group of overlapping balls.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -135,6 +141,8 @@ struct Anchor {
     /// Whether its section is clear of D (else the walk stopped at the branch's end or its
     /// limit: next to a junction, whose section is no tube's).
     clear: bool,
+    /// The centreline branch it lies on (none for a curve's inner end).
+    branch: Option<usize>,
 }
 
 /// Groups of overlapping balls (indices), in order of their first ball.
@@ -224,10 +232,17 @@ fn plan_group(
             (q - p).norm() >= 1.5 * r + disk
         })
     };
+    // Within a junction's inscribed sphere grown by the vessel's own radius.
+    let near_junction = |p: &Point3<f64>, r: f64| {
+        centerline
+            .junctions
+            .iter()
+            .any(|j| (p - j.position).norm() < j.radius + r)
+    };
     // Every place a branch enters E from outside: an anchor, with the branch's run inside E
     // (from the entry inward) and the run's other anchor when the branch leaves E again.
     let mut stubs: Vec<Stub> = Vec::new();
-    for br in &centerline.branches {
+    for (bi, br) in centerline.branches.iter().enumerate() {
         let n = br.points.len();
         if n < 2 {
             continue;
@@ -263,8 +278,10 @@ fn plan_group(
                     let next = k + step;
                     let last = next < 0 || next >= n as isize;
                     thinnest = thinnest.min(br.radius[ku]);
-                    let is_clear = clear(&br.points[ku], &t, br.radius[ku]);
-                    if is_clear || last || (br.points[ku] - start).norm() > limit {
+                    // Within a junction's flare the section is no single vessel's.
+                    let flare = near_junction(&br.points[ku], br.radius[ku]);
+                    let is_clear = !flare && clear(&br.points[ku], &t, br.radius[ku]);
+                    if is_clear || flare || last || (br.points[ku] - start).norm() > limit {
                         return Anchor {
                             point: br.points[ku],
                             into: t,
@@ -272,6 +289,7 @@ fn plan_group(
                             // inscribed sphere is wider than either vessel).
                             radius: if is_clear { br.radius[ku] } else { thinnest },
                             clear: is_clear,
+                            branch: Some(bi),
                         };
                     }
                     k = next;
@@ -353,9 +371,14 @@ fn plan_group(
     let mut tubes = Vec::new();
     let mut kinds = Vec::new();
     let spacing = h / opts.samples_per_voxel.max(0.5);
+    let sections = Sections {
+        bvh,
+        centerline,
+        rays: opts.rays.max(8),
+    };
     let bridge = |a: &Anchor, b: &Anchor| {
         let pts = hermite(a, b, spacing);
-        make_tube(bvh, pts, a, Some(b), EndCap::Open, opts)
+        make_tube(&sections, pts, a, Some(b), EndCap::Open)
     };
     // A run through E joins its two anchors (a vessel crossing D, or clipped by it); the
     // anchors left over are the vessel's ends inside D, joined below.
@@ -387,9 +410,10 @@ fn plan_group(
                 into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
                 radius: a.radius,
                 clear: false,
+                branch: None,
             };
             let pts = hermite(&a, &toward, spacing);
-            tubes.push(make_tube(bvh, pts, &a, None, EndCap::Round, opts));
+            tubes.push(make_tube(&sections, pts, &a, None, EndCap::Round));
             kinds.push(GuideKind::Junction);
         }
         1 => {
@@ -398,7 +422,7 @@ fn plan_group(
             let mut pts = vec![st.anchor.point];
             pts.extend(st.run.iter().copied());
             let pts = resample(&pts, spacing);
-            tubes.push(make_tube(bvh, pts, &st.anchor, None, EndCap::Round, opts));
+            tubes.push(make_tube(&sections, pts, &st.anchor, None, EndCap::Round));
             kinds.push(GuideKind::DeadEnd);
         }
         2 => {
@@ -438,9 +462,10 @@ fn plan_group(
                     into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
                     radius: a.radius,
                     clear: false,
+                    branch: None,
                 };
                 let pts = hermite(a, &toward, spacing);
-                tubes.push(make_tube(bvh, pts, a, None, EndCap::Round, opts));
+                tubes.push(make_tube(&sections, pts, a, None, EndCap::Round));
                 kinds.push(GuideKind::Junction);
             }
         }
@@ -573,60 +598,87 @@ fn frames(pts: &[Point3<f64>], t0: &Vector3<f64>) -> Vec<[Vector3<f64>; 3]> {
     out
 }
 
-/// The wall's distance from `c` along `rays` directions in the plane of `frame` (angles 2πj/rays
-/// from frame[1] towards frame[2]); misses and outliers (beyond 4 radii) are interpolated from
-/// their neighbours; a circle of `radius` when most rays fail.
-fn read_section(
-    bvh: &MeshBvh,
-    c: &Point3<f64>,
-    frame: &[Vector3<f64>; 3],
-    radius: f64,
+/// Reads cross-sections of the input's wall around its centreline.
+struct Sections<'a> {
+    bvh: &'a MeshBvh,
+    centerline: &'a Centerline,
     rays: usize,
-) -> Vec<f64> {
-    let rays = rays.max(8);
-    let reach = 4.0 * radius;
-    let raw: Vec<Option<f64>> = (0..rays)
-        .map(|j| {
-            let th = TAU * j as f64 / rays as f64;
-            let d = frame[1] * th.cos() + frame[2] * th.sin();
-            bvh.cast_ray(c, &d, reach)
-                .map(|hit| hit.t)
-                .filter(|t| *t > 0.0)
-        })
-        .collect();
-    let good = raw.iter().filter(|r| r.is_some()).count();
-    if good * 2 < rays {
-        return vec![radius; rays];
+}
+
+impl Sections<'_> {
+    /// Whether wall point `p` belongs to branch `own`: no other branch of the centreline is
+    /// nearer by more than a quarter of `radius` (a ray that crossed a junction into a
+    /// neighbouring vessel ends on that vessel's wall).
+    fn on_branch(&self, p: &Point3<f64>, own: usize, radius: f64) -> bool {
+        let dist = |b: &crate::centerline::Branch| {
+            b.points
+                .iter()
+                .map(|q| (p - q).norm_squared())
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        };
+        let mine = dist(&self.centerline.branches[own]);
+        self.centerline
+            .branches
+            .iter()
+            .enumerate()
+            .all(|(i, b)| i == own || mine <= dist(b) + 0.25 * radius)
     }
-    (0..rays)
-        .map(|j| {
-            raw[j].unwrap_or_else(|| {
-                // Nearest valid neighbours on either side, linearly by angle.
-                let mut back = 1;
-                while raw[(j + rays - back) % rays].is_none() {
-                    back += 1;
-                }
-                let mut fwd = 1;
-                while raw[(j + fwd) % rays].is_none() {
-                    fwd += 1;
-                }
-                let (a, b) = (
-                    raw[(j + rays - back) % rays].unwrap(),
-                    raw[(j + fwd) % rays].unwrap(),
-                );
-                a + (b - a) * back as f64 / (back + fwd) as f64
+
+    /// The wall's distance from `c` along `rays` directions in the plane of `frame` (angles
+    /// 2πj/rays from frame[1] towards frame[2]), on the anchor's branch. A ray that misses,
+    /// goes beyond 4 radii or ends on another branch's wall (the section cuts a junction) is
+    /// interpolated from its neighbours; with fewer than half the rays left the section is not
+    /// the vessel's: none.
+    fn read(&self, a: &Anchor, c: &Point3<f64>, frame: &[Vector3<f64>; 3]) -> Option<Vec<f64>> {
+        let branch = a.branch?;
+        let rays = self.rays;
+        let reach = 4.0 * a.radius;
+        let raw: Vec<Option<f64>> = (0..rays)
+            .map(|j| {
+                let th = TAU * j as f64 / rays as f64;
+                let d = frame[1] * th.cos() + frame[2] * th.sin();
+                self.bvh
+                    .cast_ray(c, &d, reach)
+                    .map(|hit| hit.t)
+                    .filter(|&t| t > 0.0 && self.on_branch(&(c + d * t), branch, a.radius))
             })
-        })
-        .collect()
+            .collect();
+        let good = raw.iter().filter(|r| r.is_some()).count();
+        if good * 2 < rays {
+            return None;
+        }
+        Some(
+            (0..rays)
+                .map(|j| {
+                    raw[j].unwrap_or_else(|| {
+                        // Nearest valid neighbours on either side, linearly by angle.
+                        let mut back = 1;
+                        while raw[(j + rays - back) % rays].is_none() {
+                            back += 1;
+                        }
+                        let mut fwd = 1;
+                        while raw[(j + fwd) % rays].is_none() {
+                            fwd += 1;
+                        }
+                        let (a, b) = (
+                            raw[(j + rays - back) % rays].unwrap(),
+                            raw[(j + fwd) % rays].unwrap(),
+                        );
+                        a + (b - a) * back as f64 / (back + fwd) as f64
+                    })
+                })
+                .collect(),
+        )
+    }
 }
 
 fn make_tube(
-    bvh: &MeshBvh,
+    sections: &Sections,
     points: Vec<Point3<f64>>,
     a: &Anchor,
     b: Option<&Anchor>,
     end_cap: EndCap,
-    opts: &GuideOptions,
 ) -> GuideTube {
     let frames = frames(&points, &a.into);
     let mut acc = vec![0.0];
@@ -635,19 +687,18 @@ fn make_tube(
     }
     let total = acc.last().copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
     let weight = acc.iter().map(|s| s / total).collect();
-    // A section that is not clear of D (next to a junction) is not read: the other end's is
-    // used, or a circle of the anchor's radius.
-    let circle = |r: f64| vec![r; opts.rays.max(8)];
+    // A section that is not clear of D (next to a junction) or not the vessel's own is not
+    // used: the other end's is, or a circle of the anchor's radius.
+    let circle = |r: f64| vec![r; sections.rays];
     let start_read = a
         .clear
-        .then(|| read_section(bvh, &points[0], &frames[0], a.radius, opts.rays));
-    let end_read = b.filter(|b| b.clear).map(|b| {
-        read_section(
-            bvh,
+        .then(|| sections.read(a, &points[0], &frames[0]))
+        .flatten();
+    let end_read = b.filter(|b| b.clear).and_then(|b| {
+        sections.read(
+            b,
             points.last().expect("points"),
             frames.last().expect("frames"),
-            b.radius,
-            opts.rays,
         )
     });
     let start_profile = start_read
@@ -658,6 +709,16 @@ fn make_tube(
         Some(b) => end_read.or(start_read).unwrap_or_else(|| circle(b.radius)),
         None => start_profile.clone(),
     };
+    let chunks = points
+        .chunks(CHUNK)
+        .map(|run| {
+            let c = Point3::from(
+                run.iter().fold(Vector3::zeros(), |s, p| s + p.coords) / run.len() as f64,
+            );
+            let r = run.iter().map(|p| (p - c).norm()).fold(0.0, f64::max);
+            (c, r)
+        })
+        .collect();
     GuideTube {
         points,
         frames,
@@ -665,6 +726,7 @@ fn make_tube(
         start_profile,
         end_profile,
         end_cap,
+        chunks,
     }
 }
 
@@ -682,6 +744,14 @@ impl GuideTube {
         a * (1.0 - w) + b * w
     }
 
+    /// The largest section radius of the tube.
+    fn widest(&self) -> f64 {
+        self.start_profile
+            .iter()
+            .chain(&self.end_profile)
+            .fold(0.0, |m, &r| m.max(r))
+    }
+
     fn mean_radius(&self, last: bool) -> f64 {
         let p = if last {
             &self.end_profile
@@ -693,13 +763,36 @@ impl GuideTube {
 
     /// Signed distance (to first order) from `x` to the tube.
     pub fn distance(&self, x: &Point3<f64>) -> f64 {
-        let (i, _) = self
-            .points
+        // The nearest sample (the first of equals, as a scan in order gives), skipping the
+        // runs whose bounding sphere is farther than the best so far.
+        // Far from the curve (beyond twice the widest section) only the sign matters: a lower
+        // bound of the distance is returned, without the search.
+        let widest = self.widest();
+        let nearest_chunk = self
+            .chunks
             .iter()
-            .enumerate()
-            .map(|(i, c)| (i, (x - c).norm_squared()))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .expect("tube has points");
+            .map(|(c, r)| ((x - c).norm() - r).max(0.0))
+            .fold(f64::INFINITY, f64::min);
+        if nearest_chunk > 2.0 * widest {
+            return nearest_chunk - widest;
+        }
+        let (mut i, mut best) = (0, f64::INFINITY);
+        for (k, (c, r)) in self.chunks.iter().enumerate() {
+            let lower = ((x - c).norm() - r).max(0.0);
+            if lower * lower > best {
+                continue;
+            }
+            let from = k * CHUNK;
+            for (j, p) in self.points[from..(from + CHUNK).min(self.points.len())]
+                .iter()
+                .enumerate()
+            {
+                let d = (x - p).norm_squared();
+                if d < best {
+                    (i, best) = (from + j, d);
+                }
+            }
+        }
         let [t, e1, e2] = self.frames[i];
         let v = x - self.points[i];
         let along = v.dot(&t);
@@ -768,12 +861,14 @@ mod tests {
             into: Vector3::new(0.0, 1.0, 0.0),
             radius: 1.0,
             clear: true,
+            branch: None,
         };
         let b = Anchor {
             point: Point3::new(0.0, 10.0, 0.0),
             into: Vector3::new(1.0, 0.0, 0.0),
             radius: 1.0,
             clear: true,
+            branch: None,
         };
         let pts = hermite(&a, &b, 0.1);
         let worst = pts

@@ -72,7 +72,13 @@ pub fn volume_in_ball_with(mesh: &TriMesh, winding: &WindingNumber, ball: &Ball)
         })
         .sum::<f64>()
         / 3.0;
-    let omega = sphere_solid_angle_inside(winding, ball, sign);
+    let probe = SphereProbe {
+        mesh,
+        winding,
+        ball,
+        sign,
+    };
+    let omega = probe.solid_angle_inside();
     sign * mesh_part + r * r * r * omega / 3.0
 }
 
@@ -244,98 +250,116 @@ struct SphereCorner {
     dist: f64,
 }
 
-/// Solid angle (steradians) of the part of the ball's sphere inside the solid, winding number
-/// × `sign` ≥ ½.
-fn sphere_solid_angle_inside(winding: &WindingNumber, ball: &Ball, sign: f64) -> f64 {
-    let base = icosphere(SPHERE_BASE_LEVEL, 1.0, Point3::origin());
-    let chord = base
-        .faces
-        .iter()
-        .flat_map(|f| {
-            let [a, b, c] = f.map(|i| base.vertices[i as usize]);
-            [(b - a).norm(), (c - b).norm(), (a - c).norm()]
-        })
-        .fold(0.0, f64::max);
-    // Every point of a triangle lies within its longest chord of each corner; 20 % more for the
-    // spherical triangle bulging past its chords.
-    let base_reach = 1.2 * chord * ball.radius;
-    let corners: Vec<SphereCorner> = base
-        .vertices
-        .par_iter()
-        .map(|v| sphere_corner(winding, ball, sign, v.coords, base_reach))
-        .collect();
-    base.faces
-        .par_iter()
-        .map(|f| {
-            let [a, b, c] = f.map(|i| corners[i as usize]);
-            sphere_triangle(winding, ball, sign, [a, b, c], base_reach, 0)
-        })
-        // Summed in face order (not by rayon's split, which follows the thread count), so the
-        // figure is the same bits for every --threads.
-        .collect::<Vec<f64>>()
-        .iter()
-        .sum()
+/// Probes the sphere of a ball for the part of it inside a solid (winding number × `sign` ≥ ½).
+struct SphereProbe<'a> {
+    mesh: &'a TriMesh,
+    winding: &'a WindingNumber,
+    ball: &'a Ball,
+    sign: f64,
 }
 
-fn sphere_corner(
-    winding: &WindingNumber,
-    ball: &Ball,
-    sign: f64,
-    dir: Vector3<f64>,
-    reach: f64,
-) -> SphereCorner {
-    let p = ball.center + dir * ball.radius;
-    let inside = sign * winding.winding_number(&p) >= 0.5;
-    let dist = winding
-        .bvh()
-        .closest_point_within(&p, reach)
-        .map_or(f64::INFINITY, |c| c.distance);
-    SphereCorner { dir, inside, dist }
-}
-
-/// Inside solid angle of the spherical triangle with corners `t`, whose points all lie within
-/// `reach` (world units) of each corner.
-fn sphere_triangle(
-    winding: &WindingNumber,
-    ball: &Ball,
-    sign: f64,
-    t: [SphereCorner; 3],
-    reach: f64,
-    depth: usize,
-) -> f64 {
-    let o = Point3::origin();
-    let omega = || {
-        solid_angle(
-            &o,
-            &Point3::from(t[0].dir),
-            &Point3::from(t[1].dir),
-            &Point3::from(t[2].dir),
-        )
-        .abs()
-    };
-    let inside = t.iter().filter(|c| c.inside).count();
-    let near = t.iter().any(|c| c.dist <= reach);
-    if (inside == 0 || inside == 3) && !near {
-        return if inside == 3 { omega() } else { 0.0 };
+impl SphereProbe<'_> {
+    /// Solid angle (steradians) of the part of the ball's sphere inside the solid.
+    fn solid_angle_inside(&self) -> f64 {
+        let base = icosphere(SPHERE_BASE_LEVEL, 1.0, Point3::origin());
+        let chord = base
+            .faces
+            .iter()
+            .flat_map(|f| {
+                let [a, b, c] = f.map(|i| base.vertices[i as usize]);
+                [(b - a).norm(), (c - b).norm(), (a - c).norm()]
+            })
+            .fold(0.0, f64::max);
+        // Every point of a triangle lies within its longest chord of each corner; 20 % more for
+        // the spherical triangle bulging past its chords.
+        let base_reach = 1.2 * chord * self.ball.radius;
+        let corners: Vec<SphereCorner> = base
+            .vertices
+            .par_iter()
+            .map(|v| self.corner(v.coords, base_reach, None))
+            .collect();
+        base.faces
+            .par_iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|i| corners[i as usize]);
+                self.triangle([a, b, c], base_reach, 0)
+            })
+            // Summed in face order (not by rayon's split, which follows the thread count), so
+            // the figure is the same bits for every --threads.
+            .collect::<Vec<f64>>()
+            .iter()
+            .sum()
     }
-    if depth == SPHERE_REFINE_DEPTH {
-        // Signed distances at the corners, interpolated linearly over the triangle.
-        if t.iter().all(|c| c.dist.is_finite()) {
-            let sd = t.map(|c| if c.inside { -c.dist } else { c.dist });
-            return omega() * negative_fraction(sd);
+
+    /// The sphere's point in direction `dir`. Near the surface (within `reach`), where a
+    /// face's interior is closest, the side of that face's plane tells inside from outside
+    /// (what the winding number's jump across the face says, at the cost of the closest-point
+    /// query made anyway). With no surface within `reach`, a corner `near` (closer than
+    /// `reach`) is on the same side; elsewhere the winding number tells.
+    fn corner(&self, dir: Vector3<f64>, reach: f64, near: Option<&SphereCorner>) -> SphereCorner {
+        let p = self.ball.center + dir * self.ball.radius;
+        let closest = self.winding.bvh().closest_point_within(&p, reach);
+        let dist = closest.map_or(f64::INFINITY, |c| c.distance);
+        if let Some(n) =
+            near.filter(|n| closest.is_none() && (n.dir - dir).norm() * self.ball.radius < reach)
+        {
+            return SphereCorner {
+                dir,
+                inside: n.inside,
+                dist,
+            };
         }
-        return omega() * inside as f64 / 3.0;
+        let face_side = closest
+            .filter(|c| c.distance > 0.0 && c.bary.iter().all(|&b| b > 1e-6))
+            .and_then(|c| {
+                let f = self.mesh.faces.get(c.face as usize)?;
+                let [a, b, q] = f.map(|i| self.mesh.vertices.get(i as usize).copied());
+                let n = (b? - a?).cross(&(q? - a?));
+                let side = (p - c.point).dot(&n) * self.sign;
+                (side != 0.0 && side.is_finite()).then_some(side < 0.0)
+            });
+        let inside =
+            face_side.unwrap_or_else(|| self.sign * self.winding.winding_number(&p) >= 0.5);
+        SphereCorner { dir, inside, dist }
     }
-    let half = 0.5 * reach;
-    let mid = |i: usize, j: usize| {
-        let dir = (t[i].dir + t[j].dir).normalize();
-        sphere_corner(winding, ball, sign, dir, half)
-    };
-    let (ab, bc, ca) = (mid(0, 1), mid(1, 2), mid(2, 0));
-    [[t[0], ab, ca], [ab, t[1], bc], [ca, bc, t[2]], [ab, bc, ca]]
-        .into_iter()
-        .map(|c| sphere_triangle(winding, ball, sign, c, half, depth + 1))
-        .sum()
+
+    /// Inside solid angle of the spherical triangle with corners `t`, whose points all lie within
+    /// `reach` (world units) of each corner.
+    fn triangle(&self, t: [SphereCorner; 3], reach: f64, depth: usize) -> f64 {
+        let o = Point3::origin();
+        let omega = || {
+            solid_angle(
+                &o,
+                &Point3::from(t[0].dir),
+                &Point3::from(t[1].dir),
+                &Point3::from(t[2].dir),
+            )
+            .abs()
+        };
+        let inside = t.iter().filter(|c| c.inside).count();
+        let near = t.iter().any(|c| c.dist <= reach);
+        if (inside == 0 || inside == 3) && !near {
+            return if inside == 3 { omega() } else { 0.0 };
+        }
+        if depth == SPHERE_REFINE_DEPTH {
+            // Signed distances at the corners, interpolated linearly over the triangle.
+            if t.iter().all(|c| c.dist.is_finite()) {
+                let sd = t.map(|c| if c.inside { -c.dist } else { c.dist });
+                return omega() * negative_fraction(sd);
+            }
+            return omega() * inside as f64 / 3.0;
+        }
+        let half = 0.5 * reach;
+        let mid = |i: usize, j: usize| {
+            let dir = (t[i].dir + t[j].dir).normalize();
+            self.corner(dir, half, Some(&t[i]))
+        };
+        let (ab, bc, ca) = (mid(0, 1), mid(1, 2), mid(2, 0));
+        [[t[0], ab, ca], [ab, t[1], bc], [ca, bc, t[2]], [ab, bc, ca]]
+            .into_iter()
+            .map(|c| self.triangle(c, half, depth + 1))
+            .sum()
+    }
 }
 
 /// Fraction of a triangle's area where the linear interpolant of the corner values `s` is

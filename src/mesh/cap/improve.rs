@@ -128,16 +128,21 @@ impl<'a> Improver<'a> {
         }
     }
 
-    /// Sweeps of flips, vertex removal and smoothing until nothing changes (at most `sweeps`).
+    /// Sweeps of flips, vertex removal and smoothing until nothing changes or the worst quality
+    /// stops rising (by 1e-4 per sweep: smoothing alone can go on nudging vertices for ever), at
+    /// most `sweeps`.
     fn optimize(&mut self, sweeps: usize) {
+        let mut worst = self.min_quality();
         for _ in 0..sweeps {
             let mut changed = self.flip_sweep();
             changed |= self.remove_sweep(0.3);
             changed |= self.flip_sweep();
             changed |= self.smooth_sweep();
-            if !changed {
+            let now = self.min_quality();
+            if !changed || now < worst + 1e-4 {
                 break;
             }
+            worst = now;
         }
     }
 

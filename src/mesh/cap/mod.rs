@@ -36,6 +36,7 @@ use super::measures::{signed_volume, triangle_aspect_ratio};
 use super::topology::boundary_loops;
 use crate::{Error, Result, TriMesh};
 use nalgebra::Point3;
+use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 use std::ops::Range;
 
@@ -251,6 +252,8 @@ pub fn cap_holes(mesh: &TriMesh, opts: &CapOptions) -> Result<(TriMesh, CapRepor
         }
     }
 
+    // Every cycle to cap (a loop that passes twice through a vertex is split into cycles).
+    let mut jobs: Vec<(usize, Vec<u32>, f64)> = Vec::new();
     for (li, lp) in loops.iter().enumerate() {
         let cycles = split_at_repeated_vertices(lp);
         if cycles.len() > 1 {
@@ -260,31 +263,53 @@ pub fn cap_holes(mesh: &TriMesh, opts: &CapOptions) -> Result<(TriMesh, CapRepor
                 cycles.len()
             ));
         }
-        for cyc in &cycles {
+        for cyc in cycles {
             if cyc.len() < 3 {
                 return Err(Error::Geometry(format!(
                     "boundary loop {li} has a part with only {} distinct vertex(es) (a triangle with a repeated vertex?); cannot cap it",
                     cyc.len()
                 )));
             }
-            let pts: Vec<Point3<f64>> = cyc.iter().map(|&v| out.vertices[v as usize]).collect();
-            let h = loop_target(cyc);
+            let h = loop_target(&cyc);
             if !(h.is_finite() && h > 0.0) {
                 return Err(Error::Geometry(format!(
                     "boundary loop {li} ({} vertices) has zero length; cannot cap it",
                     cyc.len()
                 )));
             }
-            let (patch, method) = cap_one(li, cyc, &pts, h, opts, &edges, &mut report.messages);
-            if method != CapMethod::PlanarCdt && report.fallback_loops.last() != Some(&li) {
-                report.fallback_loops.push(li);
-            }
-            report.loops.push(append_patch(
-                &mut out, &mut edges, li, cyc, h, method, &patch,
-            ));
+            jobs.push((li, cyc, h));
         }
-        report.loops_capped += 1;
     }
+    let cap_job = |(li, cyc, h): &(usize, Vec<u32>, f64), edges: &HashSet<(u32, u32)>| {
+        let pts: Vec<Point3<f64>> = cyc.iter().map(|&v| mesh.vertices[v as usize]).collect();
+        let mut messages = Vec::new();
+        let (patch, method) = cap_one(*li, cyc, &pts, *h, opts, edges, &mut messages);
+        (patch, method, messages)
+    };
+    // Cycles that share no vertex are capped independently (a cap's new edges join its own
+    // rim's vertices only), so in parallel; the others one after another, each seeing the edges
+    // of the caps before it.
+    let mut seen = HashSet::new();
+    let disjoint = jobs
+        .iter()
+        .all(|(_, cyc, _)| cyc.iter().all(|&v| seen.insert(v)));
+    let mut done: Vec<Option<_>> = if disjoint {
+        jobs.par_iter().map(|j| Some(cap_job(j, &edges))).collect()
+    } else {
+        (0..jobs.len()).map(|_| None).collect()
+    };
+    for (k, job) in jobs.iter().enumerate() {
+        let (patch, method, messages) = done[k].take().unwrap_or_else(|| cap_job(job, &edges));
+        let (li, cyc, h) = job;
+        report.messages.extend(messages);
+        if method != CapMethod::PlanarCdt && report.fallback_loops.last() != Some(li) {
+            report.fallback_loops.push(*li);
+        }
+        report.loops.push(append_patch(
+            &mut out, &mut edges, *li, cyc, *h, method, &patch,
+        ));
+    }
+    report.loops_capped += loops.len();
 
     report.vertices_added = out.num_vertices() - nv;
     report.faces_added = out.num_faces() - base_faces;
