@@ -27,7 +27,10 @@
 //! 3. **Sections.** Along a curve, a rotation-minimising frame (double reflection, Wang, Jüttler,
 //!    Zheng and Liu 2008) is carried from the first anchor; the section at arc-length fraction w
 //!    is (1 − w)·ρ_A(θ) + w·ρ_B(θ), both profiles read in the carried frame, so a tapering or
-//!    flattening vessel changes smoothly across D.
+//!    flattening vessel changes smoothly across D. On top of this coarse shape, the wall's
+//!    details: at each curve sample and angle, the ray meets the input's wall outside D at some
+//!    offset from that section; these offsets are interpolated along the curve per angle across
+//!    D (issue 21's "details carried across D"; faded out towards a junction point).
 //! 4. **Field.** At a node x of D, each tube gives |x − c|⊥ − ρ(θ) from its nearest curve sample
 //!    c (the offset projected on the section plane there; past an open anchor end the tube
 //!    continues straight, past a capped end it closes as a ball), and the fill is the smallest
@@ -95,6 +98,9 @@ pub struct GuideTube {
     pub end_profile: Vec<f64>,
     /// How the last sample ends the tube (the first is always an anchor: open).
     pub end_cap: EndCap,
+    /// The wall's offset from the interpolated section at each sample and ray angle (sample-major,
+    /// world units): the details of the wall around D carried across it.
+    pub detail: Vec<f64>,
     /// Bounding spheres (centre, radius) of runs of [`CHUNK`] consecutive samples, for the
     /// nearest-sample search.
     chunks: Vec<(Point3<f64>, f64)>,
@@ -375,6 +381,8 @@ fn plan_group(
         bvh,
         centerline,
         rays: opts.rays.max(8),
+        balls,
+        grow,
     };
     let bridge = |a: &Anchor, b: &Anchor| {
         let pts = hermite(a, b, spacing);
@@ -603,6 +611,10 @@ struct Sections<'a> {
     bvh: &'a MeshBvh,
     centerline: &'a Centerline,
     rays: usize,
+    /// The balls of D and the clearance they are grown by (world units): the wall is read
+    /// outside them only.
+    balls: &'a [Ball],
+    grow: f64,
 }
 
 impl Sections<'_> {
@@ -673,6 +685,89 @@ impl Sections<'_> {
     }
 }
 
+impl Sections<'_> {
+    /// The wall's offset from the tube's interpolated section, per sample and ray angle (step 3
+    /// of the module docs): read where the ray from a sample (outside D on a tube towards a
+    /// junction point) meets the input's wall
+    /// (E: D grown by the clearance) within half a section radius of where the section puts it,
+    /// on the anchor's `branch` (not a neighbouring vessel's wall at a junction),
+    /// and interpolated along the tube per angle, by arc length, between the readings on either
+    /// side (the first reading held before the first one; past the last, held when the tube
+    /// ends at an anchor (`open_end`), else faded out over one section radius; no offset for
+    /// an angle never read).
+    fn carry_details(
+        &self,
+        points: &[Point3<f64>],
+        frames: &[[Vector3<f64>; 3]],
+        arc: &[f64],
+        open_end: bool,
+        branch: Option<usize>,
+        base: impl Fn(usize, usize) -> f64 + Sync,
+    ) -> Vec<f64> {
+        let m = self.rays;
+        let outside_e = |p: &Point3<f64>| {
+            self.balls
+                .iter()
+                .all(|b| (p - b.center).norm() >= b.radius + self.grow)
+        };
+        let read: Vec<Option<f64>> = (0..points.len())
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let (c, f) = (&points[i], &frames[i]);
+                let base = &base;
+                // Towards a junction point, sections outside E only: from inside, a ray that
+                // leaves E crosses into whatever lies beyond D (another branch).
+                let outside = open_end || outside_e(c);
+                (0..m).map(move |j| {
+                    if !outside {
+                        return None;
+                    }
+                    let th = TAU * j as f64 / m as f64;
+                    let d = f[1] * th.cos() + f[2] * th.sin();
+                    let rho = base(i, j);
+                    let hit = self.bvh.cast_ray(c, &d, 1.5 * rho)?;
+                    let wall = c + d * hit.t;
+                    (hit.t > 0.0
+                        && (hit.t - rho).abs() < 0.5 * rho
+                        && outside_e(&wall)
+                        && branch.is_none_or(|b| self.on_branch(&wall, b, rho)))
+                    .then_some(hit.t - rho)
+                })
+            })
+            .collect();
+        let n = points.len();
+        let mut detail = vec![0.0; n * m];
+        for j in 0..m {
+            let known: Vec<usize> = (0..n).filter(|&i| read[i * m + j].is_some()).collect();
+            let (Some(&first), Some(&last)) = (known.first(), known.last()) else {
+                continue;
+            };
+            let at = |i: usize| read[i * m + j].unwrap_or(0.0);
+            for i in 0..n {
+                detail[i * m + j] = if i <= first {
+                    at(first)
+                } else if i >= last {
+                    // Held to a second anchor; towards a junction point (no anchor: the
+                    // branches' walls merge there) faded out over one section radius.
+                    let fade = if open_end {
+                        1.0
+                    } else {
+                        (1.0 - (arc[i] - arc[last]) / base(last, j).max(f64::MIN_POSITIVE)).max(0.0)
+                    };
+                    at(last) * fade
+                } else {
+                    // The readings on either side of i.
+                    let k = known.partition_point(|&q| q <= i);
+                    let (lo, hi) = (known[k - 1], known[k]);
+                    let w = (arc[i] - arc[lo]) / (arc[hi] - arc[lo]).max(f64::MIN_POSITIVE);
+                    at(lo) * (1.0 - w) + at(hi) * w
+                };
+            }
+        }
+        detail
+    }
+}
+
 fn make_tube(
     sections: &Sections,
     points: Vec<Point3<f64>>,
@@ -686,7 +781,7 @@ fn make_tube(
         acc.push(acc.last().unwrap() + (w[1] - w[0]).norm());
     }
     let total = acc.last().copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
-    let weight = acc.iter().map(|s| s / total).collect();
+    let weight: Vec<f64> = acc.iter().map(|s| s / total).collect();
     // A section that is not clear of D (next to a junction) or not the vessel's own is not
     // used: the other end's is, or a circle of the anchor's radius.
     let circle = |r: f64| vec![r; sections.rays];
@@ -709,6 +804,11 @@ fn make_tube(
         Some(b) => end_read.or(start_read).unwrap_or_else(|| circle(b.radius)),
         None => start_profile.clone(),
     };
+    let base = |i: usize, j: usize| {
+        let w = weight[i];
+        start_profile[j] * (1.0 - w) + end_profile[j] * w
+    };
+    let detail = sections.carry_details(&points, &frames, &acc, b.is_some(), a.branch, base);
     let chunks = points
         .chunks(CHUNK)
         .map(|run| {
@@ -726,6 +826,7 @@ fn make_tube(
         start_profile,
         end_profile,
         end_cap,
+        detail,
         chunks,
     }
 }
@@ -741,15 +842,18 @@ impl GuideTube {
         let a = self.start_profile[j] * (1.0 - f) + self.start_profile[k] * f;
         let b = self.end_profile[j] * (1.0 - f) + self.end_profile[k] * f;
         let w = self.weight[i];
-        a * (1.0 - w) + b * w
+        let d = &self.detail[i * m..(i + 1) * m];
+        a * (1.0 - w) + b * w + d[j] * (1.0 - f) + d[k] * f
     }
 
     /// The largest section radius of the tube.
     fn widest(&self) -> f64 {
+        let offset = self.detail.iter().fold(0.0, |m: f64, &d| m.max(d));
         self.start_profile
             .iter()
             .chain(&self.end_profile)
-            .fold(0.0, |m, &r| m.max(r))
+            .fold(0.0, |m: f64, &r| m.max(r))
+            + offset
     }
 
     fn mean_radius(&self, last: bool) -> f64 {
