@@ -66,9 +66,9 @@ pub enum InpaintMethod {
     /// `flow`: v = c + κ_a − κ (eq. 4.2) run on φ with φ_0 restored outside D after every step:
     /// the fill relaxes to a surface of constant mean curvature matching the intact wall.
     Flow,
-    /// `paper`: Algorithm 4 as written: repeat { coarse level (MST with v = c + κ_a − κ), details
-    /// restored with viscosity ε (IMST, eq. 4.1: the details diffused for a time ε), copy φ_0
-    /// outside D, ε ← ε/2 } until the zero level set in D stops moving.
+    /// `paper`: Algorithm 4 on the MSR of `msr` (`paper`): repeat { MST with v = c + κ_a − κ,
+    /// IMST with viscosity ε (eq. 4.1; the intact wall's details carried across D), copy φ_0
+    /// outside D, ε ← ε/4 } until the zero level set in D stops moving.
     Paper,
 }
 
@@ -462,9 +462,7 @@ pub fn repair_with_centerline(
         InpaintMethod::Paper => {
             let paper = PaperOptions {
                 speed: opts.speed.unwrap_or(1.0 / radius_estimate),
-                time: opts
-                    .time
-                    .unwrap_or(radius_estimate * radius_estimate),
+                time: opts.time.unwrap_or(radius_estimate * radius_estimate),
                 levels: opts.steps.max(1),
                 dt: DT_VOXELS2 * h * h,
                 epsilon,
