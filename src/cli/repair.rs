@@ -65,7 +65,7 @@ pub struct RepairArgs {
     /// its cross-section carried between the intact sections on either side; default), axial
     /// (the vessel carried across D along a straight axis), flow (v = c + κ_a − κ with the data
     /// outside D restored), msr (a coarse level plus the details transferred across D), paper
-    /// (Algorithm 4 as written).
+    /// (Algorithm 4 on the MSR: MST, IMST with viscosity, copy outside D, repeated).
     #[arg(long, default_value = "centerline", value_name = "METHOD")]
     pub method: String,
     /// Growth speed c of v = c + κ_a − κ (flow, msr, paper), 1/length (default: from the vessel
@@ -77,10 +77,11 @@ pub struct RepairArgs {
         allow_hyphen_values = true
     )]
     pub speed: Option<f64>,
-    /// Evolution time T of flow, msr and paper, length² (default R² for flow, R²/2 otherwise).
+    /// Evolution time T of flow, msr and paper, length² (default R² for flow and paper, R²/2 for
+    /// msr).
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub time: Option<f64>,
-    /// First viscosity ε of paper, length² (default R²/8; halved every iteration).
+    /// First viscosity ε of paper, length² (default R²/8; divided by 4 every iteration).
     #[arg(long, value_name = "EPS", allow_hyphen_values = true)]
     pub epsilon: Option<f64>,
     /// Most iterations of paper (default 12).

@@ -11,6 +11,7 @@ pub mod holes;
 pub mod junction;
 pub mod mask;
 pub mod msr_fill;
+pub mod paper;
 pub mod phantom;
 pub mod region;
 pub mod repair;

@@ -27,7 +27,8 @@ use super::checks::RepairChecks;
 use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions};
 use super::junction::{fill_junction, Branch};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
-use super::msr_fill::{fill_msr, transfer_details, MsrFillOptions};
+use super::msr_fill::{fill_msr, MsrFillOptions};
+use super::paper::{fill_paper, PaperOptions, DT_VOXELS2};
 use super::region::{deepest_ball, Ball};
 use super::stitch::{cut_out, stitch_patch_checked, CutOut};
 use super::topology::remove_islands;
@@ -41,7 +42,6 @@ use crate::mesh::cap::{cap_holes, CapOptions};
 use crate::mesh::measures::{bounding_box, mean_edge_length};
 use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
-use crate::motion::diffusion::diffuse;
 use crate::motion::{Flow, FlowOptions, Velocity};
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
@@ -66,9 +66,9 @@ pub enum InpaintMethod {
     /// `flow`: v = c + κ_a − κ (eq. 4.2) run on φ with φ_0 restored outside D after every step:
     /// the fill relaxes to a surface of constant mean curvature matching the intact wall.
     Flow,
-    /// `paper`: Algorithm 4 as written: repeat { coarse level (MST with v = c + κ_a − κ), details
-    /// restored with viscosity ε (IMST, eq. 4.1: the details diffused for a time ε), copy φ_0
-    /// outside D, ε ← ε/2 } until the zero level set in D stops moving.
+    /// `paper`: Algorithm 4 on the MSR of `msr` (`paper`): repeat { MST with v = c + κ_a − κ,
+    /// IMST with viscosity ε (eq. 4.1; the intact wall's details carried across D), copy φ_0
+    /// outside D, ε ← ε/4 } until the zero level set in D stops moving.
     Paper,
 }
 
@@ -460,25 +460,19 @@ pub fn repair_with_centerline(
             psi
         }
         InpaintMethod::Paper => {
-            let mut psi = phi0.clone();
-            let mut eps = epsilon;
-            converged = false;
-            iterations = 0;
-            while iterations < opts.max_iterations.max(1) {
-                iterations += 1;
-                let (mut next, ()) = transfer_details(&psi, &fill_opts, |detail| {
-                    diffuse(detail, eps, &Default::default())
-                })?;
-                blend_known(&mut next, &phi0, &weights);
-                redistance_full(&mut next)?;
-                let moved = zero_set_motion(&psi, &next, &unknown);
-                psi = next;
-                eps *= 0.5;
-                if moved < opts.tolerance_voxels * h {
-                    converged = true;
-                    break;
-                }
-            }
+            let paper = PaperOptions {
+                speed: opts.speed.unwrap_or(1.0 / radius_estimate),
+                time: opts.time.unwrap_or(radius_estimate * radius_estimate),
+                levels: opts.steps.max(1),
+                dt: DT_VOXELS2 * h * h,
+                epsilon,
+                max_iterations: opts.max_iterations,
+                tolerance: opts.tolerance_voxels * h,
+                blend: opts.blend_voxels * h,
+            };
+            let (psi, report) = fill_paper(&phi0, balls, &paper)?;
+            iterations = report.iterations;
+            converged = report.converged;
             psi
         }
     };
@@ -638,18 +632,6 @@ fn fill_axial_regions(
         junctions += 1;
     }
     Ok((g, axes, junctions))
-}
-
-/// Largest change of φ at the nodes of D next to the zero level set of either field (world units).
-fn zero_set_motion(old: &Grid3, new: &Grid3, unknown: &[bool]) -> f64 {
-    let h = old.voxel() as f32;
-    old.data()
-        .iter()
-        .zip(new.data())
-        .zip(unknown)
-        .filter(|((&a, &b), &u)| u && (a.abs() < h || b.abs() < h))
-        .map(|((&a, &b), _)| (a - b).abs() as f64)
-        .fold(0.0, f64::max)
 }
 
 /// The whole vessel re-meshed at h, with the filled sub-box in place of φ_0 inside D.
