@@ -4,14 +4,15 @@
 
 mod common;
 
-use common::{assert_fails, oracle, vesselmsr, vesselmsr_json};
+use common::{
+    assert_fails, hausdorff_in, in_regions, oracle, vesselmsr, vesselmsr_json, volume_error_in,
+};
 use nalgebra::Point3;
 use std::collections::HashSet;
 use vesselmsr::bvh::MeshBvh;
 use vesselmsr::inpaint::phantom::{make_phantom, Phantom, PhantomKind, PhantomOptions};
 use vesselmsr::inpaint::region::Ball;
 use vesselmsr::inpaint::repair::{repair, InpaintMethod, Repair, RepairOptions};
-use vesselmsr::mesh::distance::sample_surface;
 use vesselmsr::mesh::info::mesh_info;
 use vesselmsr::mesh::topology::connected_components;
 use vesselmsr::report::stenosis::volume_in_ball;
@@ -29,34 +30,6 @@ fn repaired(ph: &Phantom, method: InpaintMethod) -> Repair {
         ..RepairOptions::default()
     };
     repair(&ph.damaged, &ph.regions, &opts).unwrap()
-}
-
-fn in_regions(balls: &[Ball], p: &Point3<f64>) -> bool {
-    balls.iter().any(|b| b.contains(p))
-}
-
-/// Symmetric Hausdorff distance between the parts of `a` and `b` inside D (area samples of each
-/// inside D against the whole other surface).
-fn hausdorff_in(a: &TriMesh, b: &TriMesh, balls: &[Ball]) -> f64 {
-    let one_way = |x: &TriMesh, y: &TriMesh| {
-        let bvh = MeshBvh::new(y);
-        sample_surface(x, 60_000)
-            .iter()
-            .chain(&x.vertices)
-            .filter(|p| in_regions(balls, p))
-            .map(|p| (p - bvh.closest_point(p).point).norm())
-            .fold(0.0, f64::max)
-    };
-    one_way(a, b).max(one_way(b, a))
-}
-
-/// (Output − truth) volume inside D over the truth's volume inside D.
-fn volume_error_in(output: &TriMesh, truth: &TriMesh, balls: &[Ball]) -> f64 {
-    let (o, t): (f64, f64) = balls
-        .iter()
-        .map(|b| (volume_in_ball(output, b), volume_in_ball(truth, b)))
-        .fold((0.0, 0.0), |s, v| (s.0 + v.0, s.1 + v.1));
-    (o - t) / t
 }
 
 /// Every triangle of `input` with all three vertices outside D is in `output`, same coordinates.

@@ -104,6 +104,8 @@ pub struct GuideTube {
     /// Bounding spheres (centre, radius) of runs of [`CHUNK`] consecutive samples, for the
     /// nearest-sample search.
     chunks: Vec<(Point3<f64>, f64)>,
+    /// The largest section radius with its detail, world units.
+    widest: f64,
 }
 
 /// Curve samples per bounding sphere of [`GuideTube::distance`]'s search.
@@ -819,6 +821,11 @@ fn make_tube(
             (c, r)
         })
         .collect();
+    let widest = start_profile
+        .iter()
+        .chain(&end_profile)
+        .fold(0.0, |m: f64, &r| m.max(r))
+        + detail.iter().fold(0.0, |m: f64, &d| m.max(d));
     GuideTube {
         points,
         frames,
@@ -828,6 +835,7 @@ fn make_tube(
         end_cap,
         detail,
         chunks,
+        widest,
     }
 }
 
@@ -846,16 +854,6 @@ impl GuideTube {
         a * (1.0 - w) + b * w + d[j] * (1.0 - f) + d[k] * f
     }
 
-    /// The largest section radius of the tube.
-    fn widest(&self) -> f64 {
-        let offset = self.detail.iter().fold(0.0, |m: f64, &d| m.max(d));
-        self.start_profile
-            .iter()
-            .chain(&self.end_profile)
-            .fold(0.0, |m: f64, &r| m.max(r))
-            + offset
-    }
-
     fn mean_radius(&self, last: bool) -> f64 {
         let p = if last {
             &self.end_profile
@@ -871,7 +869,7 @@ impl GuideTube {
         // runs whose bounding sphere is farther than the best so far.
         // Far from the curve (beyond twice the widest section) only the sign matters: a lower
         // bound of the distance is returned, without the search.
-        let widest = self.widest();
+        let widest = self.widest;
         let nearest_chunk = self
             .chunks
             .iter()

@@ -272,15 +272,19 @@ pub fn repair_with_centerline(
             }
         }
     }
+    // An inward-facing input (negative enclosed volume) is turned outward (by the cap, which
+    // faces its result outward, or here), so that the patch, the stitch and every volume of the
+    // report agree.
+    let mut flipped = false;
     let mut closed_input = if opts.open_ends || EdgeMap::new(mesh).boundary_edges() == 0 {
         mesh.clone()
     } else {
-        cap_holes(mesh, &CapOptions::default())?.0
+        let (capped, report) = cap_holes(mesh, &CapOptions::default())?;
+        flipped = report.flipped;
+        capped
     };
-    // An inward-facing input (negative enclosed volume) is turned outward, so that the
-    // patch, the stitch and every volume of the report agree.
     let mut notices = Vec::new();
-    if orient_outward(&mut closed_input) > 0 {
+    if orient_outward(&mut closed_input) > 0 || flipped {
         notices.push("the input faced inward (negative volume): its triangles were flipped".into());
     }
     lap("cap", &mut timings);

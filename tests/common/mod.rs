@@ -1,16 +1,18 @@
 //! Shared helpers of the integration tests: where the real meshes are, the CLI binary, the
 //! Python reference oracle (reference/oracle.py) run in the project's virtual environment, seeded
-//! query points (points.rs), test shapes built on the library primitives (shapes.rs) and
-//! hand-made mesh files (files.rs). A test file uses them with `mod common; use common::*;`.
+//! query points (points.rs), test shapes built on the library primitives (shapes.rs),
+//! hand-made mesh files (files.rs) and measures of a repair inside its region (in_region.rs).
+//! A test file uses them with `mod common; use common::*;`.
 #![allow(dead_code)]
 
 mod files;
+mod in_region;
 mod points;
 mod shapes;
 
 // Each test file uses only some of the helpers.
 #[allow(unused_imports)]
-pub use {files::*, points::*, shapes::*};
+pub use {files::*, in_region::*, points::*, shapes::*};
 
 use nalgebra::Point3;
 use serde_json::Value;

@@ -1,0 +1,155 @@
+//! The real aortas of issue 21 (both shipped in data/, BSD): a hole in the open-ended aorta
+//! repaired with the defaults (once a watertight mesh with a slit across the lumen, 12 mm sliver
+//! edges and 7× the inpainted volume, silently), and the capped aorta, stored inward (once left
+//! inward, with negative volumes in the report). Each: a wall chop (every triangle with a vertex
+//! in a ball of 1.5 local radii on the wall; the benchmark repair_real's chop#3 of that vessel),
+//! repaired by the command a user runs (`repair --holes`), judged against the intact file
+//! inside D (the chop ball × 1.3): watertight, outward, every face near D two-sided (no slit,
+//! fin or pocket), stitched, positive volumes in the report, and the distance to the truth.
+//!
+//! Measured 2026-12-04: open aorta 3.22h / +8.6% in D; capped (inward) aorta 1.75h / −2.8%.
+//! Issue 21 asks for 1.5h; the bounds below are what the centreline fill gives today (not met).
+
+mod common;
+
+use common::{data_dir, hausdorff_in, one_sided_faces_near, vesselmsr, volume_error_in};
+use nalgebra::Point3;
+use serde_json::Value;
+use std::path::Path;
+use vesselmsr::inpaint::region::Ball;
+use vesselmsr::io::{read_mesh, write_mesh};
+use vesselmsr::mesh::info::mesh_info;
+use vesselmsr::mesh::topology::connected_components;
+use vesselmsr::TriMesh;
+
+/// `mesh` without every triangle that has a vertex in `chop`, its largest piece kept.
+fn chopped(mesh: &TriMesh, chop: &Ball) -> TriMesh {
+    let faces: Vec<[u32; 3]> = mesh
+        .faces
+        .iter()
+        .filter(|f| !f.iter().any(|&v| chop.contains(&mesh.vertices[v as usize])))
+        .copied()
+        .collect();
+    let holed = TriMesh::new(mesh.vertices.clone(), faces);
+    let (count, labels) = connected_components(&holed);
+    let mut sizes = vec![0usize; count];
+    for &l in &labels {
+        sizes[l as usize] += 1;
+    }
+    let big = (0..count).max_by_key(|&c| sizes[c]).unwrap_or(0) as u32;
+    let faces = holed
+        .faces
+        .iter()
+        .zip(&labels)
+        .filter(|(_, &l)| l == big)
+        .map(|(f, _)| *f)
+        .collect();
+    TriMesh::new(mesh.vertices.clone(), faces)
+}
+
+/// Chops `file` (data/) at `centre` with a ball of `radius`, repairs it with `repair --holes`
+/// and checks the output; returns (Hausdorff in D in voxels, volume error in D, report).
+fn chop_and_repair(file: &str, centre: [f64; 3], radius: f64, dir: &Path) -> (f64, f64, Value) {
+    let truth = read_mesh(&data_dir().join(file)).unwrap();
+    let chop = Ball {
+        center: Point3::from(centre),
+        radius,
+    };
+    let d = Ball {
+        center: chop.center,
+        radius: 1.3 * radius,
+    };
+    let damaged = chopped(&truth, &chop);
+    assert!(
+        damaged.num_faces() + 300 < truth.num_faces(),
+        "the chop removed a wall"
+    );
+    let input = dir.join("damaged.stl");
+    write_mesh(&input, &damaged).unwrap();
+    let (output, report) = (dir.join("repaired.stl"), dir.join("report.json"));
+    let p = |x: &Path| x.to_str().unwrap().to_string();
+    let run = vesselmsr(&[
+        "repair",
+        &p(&input),
+        "--holes",
+        "-o",
+        &p(&output),
+        "--report",
+        &p(&report),
+        "-q",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let repaired = read_mesh(&output).unwrap();
+    let info = mesh_info(&repaired);
+    assert!(info.watertight, "not watertight");
+    assert!(
+        info.signed_volume > 0.0,
+        "not outward: {}",
+        info.signed_volume
+    );
+    assert_eq!(report["parameters"]["stitched"], true, "{report}");
+    // Every volume the report gives is positive.
+    for part in ["input", "output"] {
+        let v = report[part]["volume"].as_f64().unwrap();
+        assert!(v > 0.0, "{part} volume {v}");
+    }
+    let h = report["parameters"]["voxel"].as_f64().unwrap();
+    let mean_edge = vesselmsr::mesh::measures::mean_edge_length(&damaged);
+    for r in report["regions"].as_array().unwrap() {
+        let added = r["inpainted_volume"].as_f64().unwrap();
+        assert!(added > 0.0, "inpainted {added}");
+        assert!(r["output_volume_in_region"].as_f64().unwrap() > 0.0);
+    }
+    let (wrong, probed) = one_sided_faces_near(&repaired, &[d], 3.0 * h, 0.1 * mean_edge.min(h));
+    assert!(
+        wrong as f64 <= 0.002 * probed as f64,
+        "{wrong} of {probed} faces near D are not two-sided (a slit)"
+    );
+    let hd = hausdorff_in(&repaired, &truth, &[d]) / h;
+    let ve = volume_error_in(&repaired, &truth, &[d]);
+    println!(
+        "{file}: Hausdorff in D {hd:.2}h, volume error in D {:+.1}%, {wrong} of {probed} faces near D one-sided",
+        100.0 * ve
+    );
+    (hd, ve, report)
+}
+
+#[test]
+fn a_hole_in_the_open_aorta_is_filled_without_a_slit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (hd, ve, _) = chop_and_repair(
+        "aorta_abdominal_open_ends.stl",
+        [210.9, 116.7, 24.33],
+        6.647,
+        dir.path(),
+    );
+    // Issue 21 asks for 1.5h (not met: 3.22h measured); the damaged input is 21.6h / −12.5%.
+    assert!(hd <= 4.0, "{hd}h");
+    assert!(ve.abs() <= 0.10, "{ve}");
+}
+
+#[test]
+fn the_inward_capped_aorta_is_repaired_outward() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = read_mesh(&data_dir().join("aorta_abdominal_capped.stl")).unwrap();
+    assert!(
+        mesh_info(&input).signed_volume < 0.0,
+        "the file is stored inward"
+    );
+    let (hd, ve, report) = chop_and_repair(
+        "aorta_abdominal_capped.stl",
+        [235.8, 115.4, 26.52],
+        6.717,
+        dir.path(),
+    );
+    let notices = report["notices"].to_string();
+    assert!(notices.contains("faced inward"), "{notices}");
+    // Issue 21 asks for 1.5h (not met: 1.75h measured); the damaged input is 20.2h / −11.9%.
+    assert!(hd <= 2.5, "{hd}h");
+    assert!(ve.abs() <= 0.05, "{ve}");
+}
