@@ -259,11 +259,11 @@ pub fn decode_msr(c: &CompactMsr) -> std::result::Result<Msr, String> {
     }
     let mut steps = vec![[0i64; 3]; s];
     let mut details = Vec::with_capacity(n);
-    for i in 1..=n {
+    for (i, level_normals) in normals.iter().enumerate().skip(1) {
         let mut level = Vec::with_capacity(s);
-        for k in 0..s {
+        for (k, nk) in level_normals.iter().enumerate() {
             let j = (i - 1) * s + k;
-            let pred = predicted(c.normal_details[j] as i64, &normals[i][k]);
+            let pred = predicted(c.normal_details[j] as i64, nk);
             let r = &c.residuals[3 * j..3 * j + 3];
             let w = [0, 1, 2].map(|a| pred[a] + r[a] as i64);
             steps[k] = [0, 1, 2].map(|a| steps[k][a] + w[a]);
@@ -361,7 +361,7 @@ fn input_positions(
 /// The octahedral code of a unit normal (a zero normal: [`ZERO_CODE`] twice).
 pub fn encode_normal(n: &Vector3<f64>) -> [i32; 2] {
     let l1 = n.x.abs() + n.y.abs() + n.z.abs();
-    if !(l1 > 0.5) {
+    if l1.is_nan() || l1 <= 0.5 {
         return [ZERO_CODE; 2];
     }
     let (x, y) = (n.x / l1, n.y / l1);
