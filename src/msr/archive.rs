@@ -1,7 +1,7 @@
 //! The MSR file: one NumPy `.npz` archive (`np.load` opens it, no pickling) holding an [`Msr`]
 //! and its parameters, with a format name and version. Version 3 (written) stores the
 //! representation in the integer codes of [`super::compact`], its members bzip2-compressed
-//! (a zip method Python's `zipfile` reads): 2.8 to 6× the input mesh file's size on the shared
+//! (a zip method Python's `zipfile` reads): 2.1 to 6.1× the input mesh file's size on the shared
 //! vessels, where version 2 (float64 arrays, deflated) took 40 to 140×; version 2 archives are
 //! still read.
 //!
