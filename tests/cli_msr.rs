@@ -131,10 +131,17 @@ fn decompose_archive_levels_and_figures_round_trip() {
     for l in rec["levels"].as_array().unwrap() {
         assert!(l["hausdorff_h"].is_null(), "{l}");
         let i = l["level"].as_u64().unwrap() as usize;
-        // The same per-level figures as decompose's.
+        // The per-level figures of decompose's, from the archive's lattice (q = 0.02h) and
+        // normals (within 1°): the mean |w| within 0.002h, the share below 0.1h within 2%.
         let d = &levels[i - 1];
-        assert!((f(&l["mean_abs_detail"]) - f(&d["mean_abs_detail"])).abs() < 1e-12);
-        assert!((f(&l["sparse_fraction"]) - f(&d["sparse_fraction"])).abs() < 1e-12);
+        assert!(
+            (f(&l["mean_abs_detail"]) - f(&d["mean_abs_detail"])).abs() < 2e-3,
+            "{l} {d}"
+        );
+        assert!(
+            (f(&l["sparse_fraction"]) - f(&d["sparse_fraction"])).abs() < 0.02,
+            "{l} {d}"
+        );
     }
     let input = read_mesh(&a).unwrap();
     let back = read_mesh(&out).unwrap();
@@ -168,8 +175,18 @@ fn decompose_archive_levels_and_figures_round_trip() {
         let (mesh, scalars) = read_ply_scalars(&levels_dir.join(format!("level_{k}.ply"))).unwrap();
         let expected = msr.mesh_at(k);
         assert_eq!(mesh.faces, expected.faces);
-        // Written from the decomposition in memory, compared with the archive read back: equal.
-        assert_eq!(mesh.vertices, expected.vertices);
+        // Written from the decomposition in memory, compared with the archive read back: within
+        // the archive's half lattice step (0.01h) per axis (S_0 exactly: the input's vertices).
+        let off = mesh
+            .vertices
+            .iter()
+            .zip(&expected.vertices)
+            .map(|(a, b)| (a - b).amax())
+            .fold(0.0, f64::max);
+        assert!(
+            off <= if k == 0 { 1e-5 } else { 0.0101 } * h,
+            "level {k}: {off}"
+        );
         if k == 0 {
             assert!(scalars.is_empty());
         } else {
@@ -177,7 +194,11 @@ fn decompose_archive_levels_and_figures_round_trip() {
             assert_eq!(scalars[0].0, "detail");
             let w = &msr.normal_details[k - 1];
             assert_eq!(scalars[0].1.len(), msr.num_vertices);
-            assert!(scalars[0].1.iter().zip(w).all(|(a, b)| *a == *b as f32));
+            // w_k = W_k·n_k within the lattice's and the normals' rounding.
+            for (a, b) in scalars[0].1.iter().zip(w) {
+                let tol = 0.03 * h + 0.02 * b.abs();
+                assert!((*a as f64 - b).abs() <= tol, "level {k}: {a} vs {b}");
+            }
         }
     }
 
@@ -354,7 +375,7 @@ fn reconstruct_refuses_bad_archives_and_writes_nothing() {
         std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
         run(&truncated, &[], "npz");
 
-        // Edited archives: another format version, a member cut short, a NaN detail.
+        // Edited archives: another format version, a member cut short, a NaN voxel size.
         let members = read_npz(&archive).unwrap();
         let edit = |name: &str, f: &dyn Fn(&str, NpyArray) -> NpyArray| -> PathBuf {
             let path = tmp.path().join(format!("{name}.npz"));
@@ -377,22 +398,19 @@ fn reconstruct_refuses_bad_archives_and_writes_nothing() {
             }
         });
         run(&v1, &[], "format version 1");
-        let short = edit("short", &|n, m| match (n, m.data) {
-            ("details", NpyData::F64(v)) => {
+        let short = edit("short", &|n, m| match (n, m.data.to_i32()) {
+            ("residuals", Some(v)) => {
                 let mut shape = m.shape.clone();
-                shape[1] -= 1;
+                shape[2] -= 1;
                 let keep = shape.iter().product();
-                NpyArray::new(&shape, NpyData::F64(v[..keep].to_vec()))
+                NpyArray::new(&shape, NpyData::narrowest_int(&v[..keep]))
             }
-            (_, data) => NpyArray { data, ..m },
+            _ => m,
         });
-        run(&short, &[], "details");
-        let nan = edit("nan", &|n, m| match (n, m.data) {
-            ("details", NpyData::F64(mut v)) => {
-                v[7] = f64::NAN;
-                NpyArray::new(&m.shape, NpyData::F64(v))
-            }
-            (_, data) => NpyArray { data, ..m },
+        run(&short, &[], "residuals");
+        let nan = edit("nan", &|n, m| match n {
+            "phi_voxel" => NpyArray::scalar_f64(f64::NAN),
+            _ => m,
         });
         run(&nan, &[], "NaN");
     }
@@ -402,9 +420,9 @@ fn reconstruct_refuses_bad_archives_and_writes_nothing() {
     let edited: Vec<(&str, NpyArray)> = members
         .iter()
         .map(|(n, m)| match (n.as_str(), &m.data) {
-            ("phi", NpyData::F32(v)) => (
+            ("phi", NpyData::I8(v)) => (
                 n.as_str(),
-                NpyArray::new(&m.shape, NpyData::F32(vec![1.0; v.len()])),
+                NpyArray::new(&m.shape, NpyData::I8(vec![1; v.len()])),
             ),
             _ => (n.as_str(), m.clone()),
         })

@@ -1,7 +1,11 @@
-//! The MSR archive: write → read gives the same representation bit for bit; NumPy's `np.load`
-//! (no pickling) reads every member with the documented shapes and values; archives of another
-//! version, truncated, or with members edited out of shape are refused with an error naming the
-//! file and the member. Also the vertex reconstruction X_k = X_N − Σ_{i>k} W_i (the input:
+//! The MSR archive: write → read gives the same representation within the compact coding's
+//! bounds (samples of every level within half a lattice step per axis, input vertices exact,
+//! normals within a degree, φ_T within h/128 near the surface); NumPy's `np.load` (no pickling)
+//! reads every member and decodes samples, normals and φ_T with the documented formulas to the
+//! values the reader gives; an archive of the float64 layout of earlier builds reads back
+//! exactly; archives of another version, truncated, with members edited out of shape or range,
+//! or needing more memory decoded than allowed are refused with an error naming the file and
+//! the member. Also the vertex reconstruction X_k = X_N − Σ_{i>k} W_i (the input:
 //! X_0 less the snap) and the samples each level's level-set reconstruction reads (a sample
 //! added at level 1 is not among those of level 0).
 
@@ -11,7 +15,8 @@ use nalgebra::{Point3, Vector3};
 use rand::RngExt;
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::io::{read_npz, write_npz, NpyArray, NpyData};
-use vesselmsr::msr::archive::{read_msr, write_msr, FORMAT_VERSION};
+use vesselmsr::msr::archive::{read_msr, read_msr_within, write_msr, FORMAT_VERSION};
+use vesselmsr::msr::compact::QUANTUM_VOXELS;
 use vesselmsr::msr::{Msr, MsrParams};
 
 /// A representation of 3 levels over a tetrahedron's 4 vertices plus 2 extra samples (snapped
@@ -104,54 +109,240 @@ fn vertices_reconstruct_every_level() {
     }
 }
 
+/// The version-2 layout (float64 arrays) of earlier builds, as they wrote it.
+fn write_v2(path: &std::path::Path, msr: &Msr) {
+    let s = msr.samples.len();
+    let n = msr.levels();
+    let [nx, ny, nz] = msr.phi.dims();
+    let v3 = |v: &mut dyn Iterator<Item = Vector3<f64>>| {
+        NpyData::F64(v.flat_map(|w| [w.x, w.y, w.z]).collect())
+    };
+    let members: Vec<(&str, NpyArray)> = vec![
+        ("format", NpyArray::text("vesselmsr-msr")),
+        ("format_version", NpyArray::scalar_i64(2)),
+        (
+            "params",
+            NpyArray::text(&serde_json::to_string(&msr.params).unwrap()),
+        ),
+        (
+            "faces",
+            NpyArray::new(&[msr.faces.len(), 3], NpyData::U32(msr.faces.concat())),
+        ),
+        (
+            "num_vertices",
+            NpyArray::scalar_i64(msr.num_vertices as i64),
+        ),
+        (
+            "extra_face",
+            NpyArray::new(
+                &[msr.extra_face.len()],
+                NpyData::I64(msr.extra_face.iter().map(|&f| f as i64).collect()),
+            ),
+        ),
+        (
+            "extra_bary",
+            NpyArray::new(
+                &[msr.extra_bary.len(), 3],
+                NpyData::F64(msr.extra_bary.concat()),
+            ),
+        ),
+        (
+            "snap",
+            NpyArray::new(&[msr.snap.len(), 3], v3(&mut msr.snap.iter().copied())),
+        ),
+        (
+            "born",
+            NpyArray::new(
+                &[s],
+                NpyData::I64(msr.born.iter().map(|&b| b as i64).collect()),
+            ),
+        ),
+        (
+            "samples",
+            NpyArray::new(&[s, 3], v3(&mut msr.samples.iter().map(|p| p.coords))),
+        ),
+        (
+            "details",
+            NpyArray::new(&[n, s, 3], v3(&mut msr.details.iter().flatten().copied())),
+        ),
+        (
+            "normal_details",
+            NpyArray::new(&[n, s], NpyData::F64(msr.normal_details.concat())),
+        ),
+        (
+            "normals",
+            NpyArray::new(
+                &[n + 1, s, 3],
+                v3(&mut msr.normals.iter().flatten().copied()),
+            ),
+        ),
+        (
+            "times",
+            NpyArray::new(&[n + 1], NpyData::F64(msr.times.clone())),
+        ),
+        (
+            "phi",
+            NpyArray::new(&[nz, ny, nx], NpyData::F32(msr.phi.data().to_vec())),
+        ),
+        (
+            "phi_origin",
+            NpyArray::new(&[3], NpyData::F64(msr.phi.transform().origin.to_vec())),
+        ),
+        ("phi_voxel", NpyArray::scalar_f64(msr.phi.voxel())),
+    ];
+    write_npz(path, &members).unwrap();
+}
+
 #[test]
-fn archive_round_trips_and_numpy_reads_it() {
-    let (msr, _) = sample_msr();
+fn archive_round_trips_within_its_lattice_and_numpy_decodes_it() {
+    let (msr, xs) = sample_msr();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("shape.msr.npz");
     write_msr(&path, &msr).unwrap();
-    assert_eq!(read_msr(&path).unwrap(), msr);
+    let back = read_msr(&path).unwrap();
+    let h = msr.phi.voxel();
+    let q = QUANTUM_VOXELS * h;
+    // Exact: connectivity, births, times, parameters, the input vertices.
+    assert_eq!(
+        (
+            &back.faces,
+            back.num_vertices,
+            &back.extra_face,
+            &back.extra_bary
+        ),
+        (
+            &msr.faces,
+            msr.num_vertices,
+            &msr.extra_face,
+            &msr.extra_bary
+        )
+    );
+    assert_eq!(
+        (&back.born, &back.times, &back.params),
+        (&msr.born, &msr.times, &msr.params)
+    );
+    for (a, b) in back
+        .mesh_at(0)
+        .vertices
+        .iter()
+        .zip(&msr.mesh_at(0).vertices)
+    {
+        assert!((a - b).norm() < 1e-12, "{a} vs {b}");
+    }
+    // Every level's samples within half a lattice step per axis (never adding up).
+    for (k, x) in xs.iter().enumerate() {
+        for (a, b) in back.samples_at(k).iter().zip(x) {
+            assert!(
+                (a - b).amax() <= 0.5 * q * (1.0 + 1e-9),
+                "level {k}: {a} vs {b}"
+            );
+        }
+    }
+    // The normals within a degree.
+    for i in 0..=msr.levels() {
+        for (a, b) in back.normals[i].iter().zip(&msr.normals[i]) {
+            assert!(a.angle(b).to_degrees() < 1.0, "level {i}: {a} vs {b}");
+        }
+    }
+    // φ_T within h/128 near the surface, half a far step beyond (the reach: the largest detail
+    // plus 4h, over 63 codes).
+    let largest = msr
+        .details
+        .iter()
+        .flatten()
+        .map(|w| w.norm())
+        .fold(0.0, f64::max);
+    let step = (0.25 * h).max((largest + 3.0 * h) / 63.0);
+    let (mut near, mut far) = (0, 0);
+    for (a, b) in back.phi.data().iter().zip(msr.phi.data()) {
+        let (a, b) = (*a as f64, *b as f64);
+        if b.abs() <= h {
+            assert!((a - b).abs() <= h / 128.0 + 1e-6, "{a} vs {b}");
+            near += 1;
+        } else if b.abs() < 6.0 * h {
+            assert!(
+                (a - b).abs() <= 0.5 * step + 1e-6 && a.signum() == b.signum(),
+                "{a} vs {b}"
+            );
+            far += 1;
+        }
+    }
+    assert!(near > 0 && far > 0, "near {near}, far {far}");
 
+    // NumPy decodes the documented members with the documented formulas.
     let script = r#"
 import json, sys
 import numpy as np
 z = np.load(sys.argv[1], allow_pickle=False)
 out = {k: {"shape": list(z[k].shape), "dtype": z[k].dtype.str} for k in z.files}
-out["format"] = str(z["format"])
 out["version"] = int(z["format_version"])
-out["params"] = json.loads(str(z["params"]))
-out["details_121"] = float(z["details"][1, 2, 1])
-out["phi_k_j_i"] = float(z["phi"][1, 2, 3])
-out["faces_row"] = [int(v) for v in z["faces"][2]]
+m = 127
+c = np.cumsum(z["normals"].astype(np.int64), 0).transpose(0, 2, 1) / m
+u, v = c[..., 0], c[..., 1]
+w = 1 - np.abs(u) - np.abs(v)
+sg = lambda x: np.where(x < 0, -1.0, 1.0)
+uu = np.where(w < 0, (1 - np.abs(v)) * sg(u), u)
+vv = np.where(w < 0, (1 - np.abs(u)) * sg(v), v)
+n = np.stack([uu, vv, w], -1)
+n /= np.linalg.norm(n, axis=-1, keepdims=True)
+N = n.shape[0] - 1
+q, qb = float(z["quantum"]), float(z["birth_quantum"])
+verts, faces = z["vertices"], z["faces"]
+pos = np.concatenate([verts, np.einsum("ek,ekd->ed", z["extra_bary"], verts[faces[z["extra_face"]]])])
+base = np.concatenate([pos + qb * z["snap"].T, z["phi_origin"] + qb * z["added_at"].T])
+res = z["residuals"].transpose(0, 2, 1)
+steps = np.zeros_like(base)
+for i in range(1, N + 1):
+    nn = n[i]
+    steps += res[i - 1] + np.rint(z["normal_details"][i - 1][:, None] * nn)
+xn = base + q * steps
+code = z["phi"].astype(np.float64)
+h, far = float(z["phi_voxel"]), float(z["phi_far"])
+phi = np.where(np.abs(code) <= 64, code * h / 64, np.sign(code) * (h + (np.abs(code) - 64) * far))
+out["x_n"] = xn.tolist()
+out["phi_values"] = phi.ravel().tolist()
+out["n0"] = n[0].tolist()
 print(json.dumps(out))
 "#;
     let v = run_python(script, &[&path]);
-    println!("{v}");
     let shape = |k: &str| v[k]["shape"].clone();
-    assert_eq!(v["format"], "vesselmsr-msr");
     assert_eq!(v["version"], FORMAT_VERSION);
-    assert_eq!(v["params"]["velocity"], "vpmcf");
-    assert_eq!(v["params"]["levels"], 3);
-    assert_eq!(shape("faces"), serde_json::json!([4, 3]));
-    assert_eq!(v["faces"]["dtype"], "<u4");
-    assert_eq!(shape("samples"), serde_json::json!([7, 3]));
-    assert_eq!(shape("details"), serde_json::json!([3, 7, 3]));
-    assert_eq!(shape("normal_details"), serde_json::json!([3, 7]));
-    assert_eq!(shape("times"), serde_json::json!([4]));
-    assert_eq!(shape("normals"), serde_json::json!([4, 7, 3]));
-    assert_eq!(shape("snap"), serde_json::json!([6, 3]));
-    assert_eq!(shape("born"), serde_json::json!([7]));
-    assert_eq!(v["born"]["dtype"], "<i8");
-    assert_eq!(shape("extra_face"), serde_json::json!([2]));
-    assert_eq!(shape("extra_bary"), serde_json::json!([2, 3]));
+    assert_eq!(shape("residuals"), serde_json::json!([3, 3, 7]));
+    assert_eq!(shape("normals"), serde_json::json!([4, 2, 7]));
+    assert_eq!(shape("snap"), serde_json::json!([3, 6]));
+    assert_eq!(shape("added_at"), serde_json::json!([3, 1]));
     assert_eq!(shape("phi"), serde_json::json!([2, 3, 4]));
-    assert_eq!(v["phi"]["dtype"], "<f4");
-    assert_eq!(v["details_121"].as_f64().unwrap(), msr.details[1][2].y);
-    assert_eq!(
-        v["phi_k_j_i"].as_f64().unwrap(),
-        msr.phi.get(3, 2, 1) as f64
-    );
-    assert_eq!(v["faces_row"], serde_json::json!(msr.faces[2]));
+    assert_eq!(v["phi"]["dtype"], "|i1");
+    let floats = |k: &str| -> Vec<f64> {
+        let mut out = Vec::new();
+        let mut walk = vec![&v[k]];
+        while let Some(x) = walk.pop() {
+            match x {
+                serde_json::Value::Array(a) => walk.extend(a.iter().rev()),
+                x => out.push(x.as_f64().unwrap()),
+            }
+        }
+        out
+    };
+    let samples: Vec<f64> = back.samples.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+    for (a, b) in floats("x_n").iter().zip(&samples) {
+        assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+    }
+    for (a, b) in floats("phi_values").iter().zip(back.phi.data()) {
+        assert!((a - *b as f64).abs() < 1e-5, "{a} vs {b}");
+    }
+    let n0: Vec<f64> = back.normals[0]
+        .iter()
+        .flat_map(|p| [p.x, p.y, p.z])
+        .collect();
+    for (a, b) in floats("n0").iter().zip(&n0) {
+        assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+    }
+
+    // An archive of the float64 layout of earlier builds reads back exactly.
+    let old = dir.path().join("v2.npz");
+    write_v2(&old, &msr);
+    assert_eq!(read_msr(&old).unwrap(), msr);
 }
 
 #[test]
@@ -161,6 +352,12 @@ fn damaged_archives_are_refused() {
     let path = dir.path().join("shape.msr.npz");
     write_msr(&path, &msr).unwrap();
     let good = std::fs::read(&path).unwrap();
+    // Every member fits in 1000 bytes; the decoded representation needs 1776.
+    let e = read_msr_within(&path, 1000).unwrap_err().to_string();
+    assert!(
+        e.contains("decoding") && e.contains("memory limit") && e.contains("shape.msr.npz"),
+        "{e}"
+    );
     let members = read_npz(&path).unwrap();
     let edited = |name: &str, array: Option<NpyArray>| {
         let m: Vec<(&str, NpyArray)> = members
@@ -184,10 +381,17 @@ fn damaged_archives_are_refused() {
         ),
         (
             edited(
-                "details",
-                Some(NpyArray::new(&[2, 7, 3], NpyData::F64(vec![0.0; 42]))),
+                "residuals",
+                Some(NpyArray::new(&[2, 3, 7], NpyData::I8(vec![0; 42]))),
             ),
-            "details",
+            "residuals",
+        ),
+        (
+            edited(
+                "residuals",
+                Some(NpyArray::new(&[3, 3, 7], NpyData::F64(vec![0.0; 63]))),
+            ),
+            "int8, int16 or int32",
         ),
         (
             edited(
@@ -199,9 +403,16 @@ fn damaged_archives_are_refused() {
         (
             edited(
                 "snap",
-                Some(NpyArray::new(&[3, 3], NpyData::F64(vec![0.0; 9]))),
+                Some(NpyArray::new(&[3, 3], NpyData::I8(vec![0; 9]))),
             ),
-            "'snap' has 3 rows",
+            "snap",
+        ),
+        (
+            edited(
+                "normals",
+                Some(NpyArray::new(&[4, 2, 7], NpyData::I16(vec![300; 56]))),
+            ),
+            "not within ±127",
         ),
         (
             edited(
@@ -210,7 +421,11 @@ fn damaged_archives_are_refused() {
             ),
             "index 9",
         ),
-        (edited("samples", None), "no member 'samples'"),
+        (edited("added_at", None), "no member 'added_at'"),
+        (
+            edited("quantum", Some(NpyArray::scalar_f64(-1.0))),
+            "quantum",
+        ),
         (
             edited("format", Some(NpyArray::text("something-else"))),
             "format",

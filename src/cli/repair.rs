@@ -433,8 +433,13 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
     }
     if let Some(path) = args.picture.as_ref().filter(|_| !balls.is_empty()) {
         // The input as it was, its holes open.
+        let opts = RepairPictureOptions {
+            added_distance: 0.5 * result.voxel,
+            unit: args.units.clone(),
+            figures: picture_figures(&report),
+            ..RepairPictureOptions::default()
+        };
         outputs.write(path, |p| {
-            let opts = RepairPictureOptions::default();
             render_repair(&mesh, &result.mesh, &balls, p, &opts)
         })?;
     }
@@ -483,6 +488,38 @@ fn unrepaired(mesh: &TriMesh, opts: &RepairOptions) -> crate::Result<Repair> {
         notices: Vec::new(),
         timings: vec![("cap".into(), start.elapsed().as_secs_f64())],
     })
+}
+
+/// The report's figures written on the picture: volumes, what was inpainted, the stenosis,
+/// watertightness and the method.
+fn picture_figures(r: &Report) -> Vec<String> {
+    let u = &r.units;
+    let inpainted: f64 = r.regions.iter().map(|g| g.inpainted_volume).sum();
+    let stenosis = r
+        .regions
+        .iter()
+        .filter_map(|g| g.diameter_stenosis_pct)
+        .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))));
+    vec![
+        format!(
+            "input volume {:.1} {u}³{}   output volume {:.1} {u}³   inpainted {:.1} {u}³",
+            r.input.measures.volume,
+            if r.input_capped { " (ends capped)" } else { "" },
+            r.output.measures.volume,
+            inpainted
+        ),
+        format!(
+            "stenosis (diameter) {}   watertight {}   method {}{}",
+            stenosis.map_or("n/a".to_string(), |p| format!("{p:.0}%")),
+            if r.watertight { "yes" } else { "no" },
+            r.parameters.method,
+            if r.parameters.stitched {
+                ", stitched"
+            } else {
+                ", whole vessel re-meshed"
+            }
+        ),
+    ]
 }
 
 fn print_summary(r: &Report, secs: f64) {

@@ -34,7 +34,9 @@ pub use atomic::write_atomic;
 pub use centerline::{read_centerline_json, write_centerline_json, write_centerline_vtp};
 pub use markups::{is_markups_path, read_markups};
 pub use npy::{npy_sidecar_path, read_npy, write_npy, NpySidecar};
-pub use npz::{read_npz, read_npz_within, write_npz, NpyArray, NpyData};
+pub use npz::{
+    read_npz, read_npz_within, write_npz, write_npz_with, NpyArray, NpyData, NpzCompression,
+};
 pub use nrrd::{read_nrrd, write_nrrd};
 pub use vti::{read_vti, write_vti, VTI_ARRAY_NAME};
 pub use vtk_legacy::{read_vtk_legacy, write_vtk_legacy, write_vtk_legacy_to};

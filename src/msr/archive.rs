@@ -1,24 +1,43 @@
-//! The MSR file: one NumPy `.npz` archive (`np.load` opens it, no pickling) holding every array
-//! of an [`Msr`] and the parameters, with a format name and version.
+//! The MSR file: one NumPy `.npz` archive (`np.load` opens it, no pickling) holding an [`Msr`]
+//! and its parameters, with a format name and version. Version 3 (written) stores the
+//! representation in the integer codes of [`super::compact`], its members bzip2-compressed
+//! (a zip method Python's `zipfile` reads): 2.1 to 6.1× the input mesh file's size on the shared
+//! vessels, where version 2 (float64 arrays, deflated) took 40 to 140×; version 2 archives are
+//! still read.
 //!
-//! Members (S samples, V of them mesh vertices, F faces, N levels, grid nx×ny×nz):
-//! `format` (text "vesselmsr-msr"), `format_version` (int64, [`FORMAT_VERSION`]), `params`
-//! (text: the [`MsrParams`] as JSON), `faces` (uint32 F×3), `num_vertices` (int64),
-//! `extra_face` (int64 I−V), `extra_bary` (float64 (I−V)×3), `snap` (float64 I×3: X_0 less the
-//! input position of each of the I input samples), `born` (int64 S: the level each sample joined
-//! at, 0 for the input's; I ≤ S), `samples` (float64 S×3: X_N),
-//! `details` (float64 N×S×3: W_1..W_N), `normal_details` (float64 N×S: w_1..w_N), `normals`
-//! (float64 (N+1)×S×3: the unit outward normals n_0..n_N of S_i at X_i), `times`
-//! (float64 N+1), `phi` (float32 nz×ny×nx, x fastest: φ_T), `phi_origin` (float64 3) and
-//! `phi_voxel` (float64). Coordinates are in the units of the input mesh.
+//! Version 3 members (S samples, I of them the input's, V of those its vertices, F faces, N levels,
+//! grid nx×ny×nz; "int" is int8, int16 or int32, the narrowest that holds the values; a row of
+//! coordinates is stored as planes, one per axis): `format` (text "vesselmsr-msr"),
+//! `format_version` (int64 3), `params` (text: the [`MsrParams`] as JSON), `faces` (uint32
+//! F×3), `vertices` (float64 V×3: the input mesh's vertices), `extra_face` (int64 I−V) and
+//! `extra_bary` (float64 (I−V)×3: the face and barycentric coordinates of each other input
+//! sample), `quantum` (float64 q) and `birth_quantum` (float64 q_b, world units), `snap` (int
+//! 3×I: X_0 less the input position, in steps of q_b), `added_at` (int 3×(S−I): the position at
+//! birth of each sample added after the input, in steps of q_b from `phi_origin`), `born` (int64
+//! S: the level each sample joined at, 0 for the input's), `normals` (int (N+1)×2×S: octahedral
+//! codes of n_0..n_N, each level less the level before), `normal_details` (int N×S) and
+//! `residuals` (int N×3×S: the details in steps of q), `times` (float64 N+1), `phi` (int8
+//! nz×ny×nx, x fastest: φ_T's codes), `phi_origin` (float64 3), `phi_voxel` (float64 h) and
+//! `phi_far` (float64). Coordinates are in the units of the input mesh.
+//!
+//! Decoding with NumPy (`z = np.load(path)`, m = 127): codes (u, v) = `np.cumsum(z['normals'],
+//! 0)` / m, w = 1 − |u| − |v|, where w < 0 (u, v) ← ((1 − |v|)·sign u, (1 − |u|)·sign v) (sign 0
+//! = +1); n = (u, v, w) normalised, and a code (128, 128) is the zero normal. The detail, in
+//! steps of q, is residuals[i−1] + np.rint(normal_details[i−1]·n̂) with n̂ the decoded n_i;
+//! each sample's position at birth is its input position plus q_b·snap
+//! (an input sample's: the vertex, or `extra_bary` of its face's corners) or `phi_origin` +
+//! q_b·added_at, and X_i is that plus q·Σ_{j≤i} of its details. φ_T = c·h/64 for |c| ≤ 64,
+//! else sign(c)·(h + (|c| − 64)·phi_far).
 //!
 //! [`read_msr`] checks the format name and version and that every shape agrees with the others,
 //! so an archive of another version, a truncated one or one whose arrays were edited out of
-//! shape gives an error naming the file and the member.
+//! shape or range gives an error naming the file and the member; members whose decoding would
+//! need more than the memory limit are refused before it.
 
+use super::compact::{decode_msr, decoded_bytes, encode_msr, CompactMsr};
 use super::{Msr, MsrParams};
 use crate::grid::{Grid3, GridTransform};
-use crate::io::{read_npz_within, write_npz, NpyArray, NpyData};
+use crate::io::{read_npz_within, write_npz_with, NpyArray, NpyData, NpzCompression};
 use crate::{Error, Result};
 use nalgebra::{Point3, Vector3};
 use std::collections::HashMap;
@@ -26,17 +45,20 @@ use std::path::Path;
 
 /// The format name stored in every archive.
 pub const FORMAT_NAME: &str = "vesselmsr-msr";
-/// The archive layout version this build writes and reads.
-pub const FORMAT_VERSION: i64 = 2;
+/// The archive layout version this build writes (it also reads [`FORMAT_VERSION_F64`]).
+pub const FORMAT_VERSION: i64 = 3;
+/// The float64 layout of earlier builds, still read.
+pub const FORMAT_VERSION_F64: i64 = 2;
 
-/// Writes `msr` to `path` (atomic).
+/// Writes `msr` to `path` (atomic) in the compact layout (version [`FORMAT_VERSION`]).
 pub fn write_msr(path: &Path, msr: &Msr) -> Result<()> {
-    let s = msr.samples.len();
-    let n = msr.levels();
-    let [nx, ny, nz] = msr.phi.dims();
-    let flat3 = |v: &mut dyn Iterator<Item = [f64; 3]>| v.flatten().collect::<Vec<f64>>();
-    let params = serde_json::to_string(&msr.params)
+    let c = encode_msr(msr);
+    let s = c.born.len();
+    let n = c.times.len() - 1;
+    let [nx, ny, nz] = c.phi_dims;
+    let params = serde_json::to_string(&c.params)
         .map_err(|e| Error::format(path, format!("parameters: {e}")))?;
+    let f64s = |v: &[[f64; 3]]| NpyData::F64(v.iter().flatten().copied().collect());
     let members: Vec<(&str, NpyArray)> = vec![
         ("format", NpyArray::text(FORMAT_NAME)),
         ("format_version", NpyArray::scalar_i64(FORMAT_VERSION)),
@@ -44,89 +66,79 @@ pub fn write_msr(path: &Path, msr: &Msr) -> Result<()> {
         (
             "faces",
             NpyArray::new(
-                &[msr.faces.len(), 3],
-                NpyData::U32(msr.faces.iter().flatten().copied().collect()),
+                &[c.faces.len(), 3],
+                NpyData::U32(c.faces.iter().flatten().copied().collect()),
             ),
         ),
         (
-            "num_vertices",
-            NpyArray::scalar_i64(msr.num_vertices as i64),
+            "vertices",
+            NpyArray::new(&[c.vertices.len(), 3], f64s(&c.vertices)),
         ),
         (
             "extra_face",
             NpyArray::new(
-                &[msr.extra_face.len()],
-                NpyData::I64(msr.extra_face.iter().map(|&f| f as i64).collect()),
+                &[c.extra_face.len()],
+                NpyData::I64(c.extra_face.iter().map(|&f| f as i64).collect()),
             ),
         ),
         (
             "extra_bary",
-            NpyArray::new(
-                &[msr.extra_bary.len(), 3],
-                NpyData::F64(flat3(&mut msr.extra_bary.iter().copied())),
-            ),
+            NpyArray::new(&[c.extra_bary.len(), 3], f64s(&c.extra_bary)),
         ),
+        ("quantum", NpyArray::scalar_f64(c.quantum)),
+        ("birth_quantum", NpyArray::scalar_f64(c.birth_quantum)),
         (
             "snap",
             NpyArray::new(
-                &[msr.snap.len(), 3],
-                NpyData::F64(flat3(&mut msr.snap.iter().map(|w| (*w).into()))),
+                &[3, c.snap.len() / 3],
+                NpyData::narrowest_int(&planes(&c.snap, 3, 1)),
+            ),
+        ),
+        (
+            "added_at",
+            NpyArray::new(
+                &[3, c.added_at.len() / 3],
+                NpyData::narrowest_int(&planes(&c.added_at, 3, 1)),
             ),
         ),
         (
             "born",
             NpyArray::new(
                 &[s],
-                NpyData::I64(msr.born.iter().map(|&b| b as i64).collect()),
-            ),
-        ),
-        (
-            "samples",
-            NpyArray::new(
-                &[s, 3],
-                NpyData::F64(flat3(&mut msr.samples.iter().map(|p| p.coords.into()))),
-            ),
-        ),
-        (
-            "details",
-            NpyArray::new(
-                &[n, s, 3],
-                NpyData::F64(flat3(
-                    &mut msr.details.iter().flatten().map(|w| (*w).into()),
-                )),
-            ),
-        ),
-        (
-            "normal_details",
-            NpyArray::new(
-                &[n, s],
-                NpyData::F64(msr.normal_details.iter().flatten().copied().collect()),
+                NpyData::I64(c.born.iter().map(|&b| b as i64).collect()),
             ),
         ),
         (
             "normals",
             NpyArray::new(
-                &[msr.normals.len(), s, 3],
-                NpyData::F64(flat3(
-                    &mut msr.normals.iter().flatten().map(|w| (*w).into()),
-                )),
+                &[n + 1, 2, s],
+                NpyData::narrowest_int(&planes(&c.normals, 2, n + 1)),
+            ),
+        ),
+        (
+            "normal_details",
+            NpyArray::new(&[n, s], NpyData::narrowest_int(&c.normal_details)),
+        ),
+        (
+            "residuals",
+            NpyArray::new(
+                &[n, 3, s],
+                NpyData::narrowest_int(&planes(&c.residuals, 3, n)),
             ),
         ),
         (
             "times",
-            NpyArray::new(&[msr.times.len()], NpyData::F64(msr.times.clone())),
+            NpyArray::new(&[c.times.len()], NpyData::F64(c.times.clone())),
         ),
-        (
-            "phi",
-            NpyArray::new(&[nz, ny, nx], NpyData::F32(msr.phi.data().to_vec())),
-        ),
+        ("phi", NpyArray::new(&[nz, ny, nx], NpyData::I8(c.phi))),
         (
             "phi_origin",
-            NpyArray::new(&[3], NpyData::F64(msr.phi.transform().origin.to_vec())),
+            NpyArray::new(&[3], NpyData::F64(c.phi_origin.to_vec())),
         ),
-        ("phi_voxel", NpyArray::scalar_f64(msr.phi.voxel())),
+        ("phi_voxel", NpyArray::scalar_f64(c.phi_voxel)),
+        ("phi_far", NpyArray::scalar_f64(c.phi_far)),
     ];
-    write_npz(path, &members)
+    write_npz_with(path, &members, NpzCompression::Bzip2)
 }
 
 /// Reads an archive written by [`write_msr`] (see the module doc for what is checked), with the
@@ -140,6 +152,34 @@ pub fn read_msr(path: &Path) -> Result<Msr> {
 pub fn read_msr_within(path: &Path, max_bytes: u64) -> Result<Msr> {
     let mut m: HashMap<String, NpyArray> = read_npz_within(path, max_bytes)?.into_iter().collect();
     let bad = |what: String| Error::format(path, what);
+    let format = match m.remove("format") {
+        Some(NpyArray {
+            data: NpyData::Text(t),
+            ..
+        }) => t,
+        Some(_) => return Err(bad("member 'format' is not text".into())),
+        None => return Err(bad("no member 'format' (not an MSR archive?)".into())),
+    };
+    if format != FORMAT_NAME {
+        return Err(bad(format!("format '{format}' is not '{FORMAT_NAME}'")));
+    }
+    let version = m
+        .remove("format_version")
+        .ok_or_else(|| bad("no member 'format_version' (not an MSR archive?)".into()))
+        .and_then(|a| scalar_i64(a, "format_version").map_err(&bad))?;
+    match version {
+        FORMAT_VERSION => read_compact(path, m, max_bytes),
+        FORMAT_VERSION_F64 => read_f64(path, m),
+        _ => Err(bad(format!(
+            "archive format version {version}; this vesselmsr reads versions \
+             {FORMAT_VERSION_F64} and {FORMAT_VERSION}"
+        ))),
+    }
+}
+
+/// The members of a version-2 archive (float64 arrays), format and version already checked.
+fn read_f64(path: &Path, mut m: HashMap<String, NpyArray>) -> Result<Msr> {
+    let bad = |what: String| Error::format(path, what);
     let mut take = |name: &str| {
         m.remove(name)
             .ok_or_else(|| bad(format!("no member '{name}' (not an MSR archive?)")))
@@ -148,16 +188,6 @@ pub fn read_msr_within(path: &Path, max_bytes: u64) -> Result<Msr> {
         NpyData::Text(t) => Ok(t),
         _ => Err(bad(format!("member '{name}' is not text"))),
     };
-    let format = text(take("format")?, "format")?;
-    if format != FORMAT_NAME {
-        return Err(bad(format!("format '{format}' is not '{FORMAT_NAME}'")));
-    }
-    let version = scalar_i64(take("format_version")?, "format_version").map_err(&bad)?;
-    if version != FORMAT_VERSION {
-        return Err(bad(format!(
-            "archive format version {version}; this vesselmsr reads version {FORMAT_VERSION}"
-        )));
-    }
     let params: MsrParams = serde_json::from_str(&text(take("params")?, "params")?)
         .map_err(|e| bad(format!("member 'params': {e}")))?;
     let num_vertices = scalar_i64(take("num_vertices")?, "num_vertices").map_err(&bad)?;
@@ -303,6 +333,219 @@ pub fn read_msr_within(path: &Path, max_bytes: u64) -> Result<Msr> {
         phi,
         params,
     })
+}
+
+/// The members of a version-3 archive (the codes of [`super::compact`]), format and version
+/// already checked: every shape and range is checked, then the memory the decoded
+/// representation needs, before decoding.
+fn read_compact(path: &Path, mut m: HashMap<String, NpyArray>, max_bytes: u64) -> Result<Msr> {
+    let bad = |what: String| Error::format(path, what);
+    let mut take = |name: &str| {
+        m.remove(name)
+            .ok_or_else(|| bad(format!("no member '{name}' (not an MSR archive?)")))
+    };
+    let params: MsrParams = match take("params")?.data {
+        NpyData::Text(t) => {
+            serde_json::from_str(&t).map_err(|e| bad(format!("member 'params': {e}")))?
+        }
+        _ => return Err(bad("member 'params' is not text".into())),
+    };
+    let faces = match take("faces")? {
+        NpyArray {
+            shape,
+            data: NpyData::U32(v),
+        } if shape.len() == 2 && shape[1] == 3 => v,
+        _ => return Err(bad("member 'faces' is not a uint32 F×3 array".into())),
+    };
+    let nf = faces.len() / 3;
+    let (vshape, vertices) =
+        f64_array(take("vertices")?, "vertices", &[None, Some(3)]).map_err(&bad)?;
+    let nv = vshape[0];
+    if let Some(&i) = faces.iter().find(|&&i| i as usize >= nv) {
+        return Err(bad(format!("member 'faces': index {i} ≥ {nv} vertices")));
+    }
+    let extra_face = match take("extra_face")? {
+        NpyArray {
+            shape,
+            data: NpyData::I64(v),
+        } if shape.len() == 1 => v,
+        _ => return Err(bad("member 'extra_face' is not a 1-D int64 array".into())),
+    };
+    if let Some(&f) = extra_face.iter().find(|&&f| f < 0 || f as usize >= nf) {
+        return Err(bad(format!(
+            "member 'extra_face': face {f} is not within 0..{nf}"
+        )));
+    }
+    let extra = extra_face.len();
+    let (_, extra_bary) =
+        f64_array(take("extra_bary")?, "extra_bary", &[Some(extra), Some(3)]).map_err(&bad)?;
+    let inputs = nv + extra;
+    let quantum = positive(take("quantum")?, "quantum").map_err(&bad)?;
+    let birth_quantum = positive(take("birth_quantum")?, "birth_quantum").map_err(&bad)?;
+    let (_, snap) = int_array(take("snap")?, "snap", &[Some(3), Some(inputs)]).map_err(&bad)?;
+    let snap = interleaved(&snap, 3, 1);
+    let born = match take("born")? {
+        NpyArray {
+            shape,
+            data: NpyData::I64(v),
+        } if shape.len() == 1 && shape[0] >= inputs => v,
+        _ => {
+            return Err(bad(format!(
+                "member 'born' is not an int64 array of at least {inputs} samples"
+            )))
+        }
+    };
+    let s = born.len();
+    let times = f64_array(take("times")?, "times", &[None]).map_err(&bad)?.1;
+    let levels = times
+        .len()
+        .checked_sub(1)
+        .ok_or_else(|| bad("member 'times' is empty".into()))?;
+    check_params(&params, levels).map_err(|m| bad(format!("member 'params': {m}")))?;
+    if let Some((k, &b)) = born
+        .iter()
+        .enumerate()
+        .find(|&(k, &b)| !(0..levels.max(1) as i64).contains(&b) || (k < inputs && b != 0))
+    {
+        return Err(bad(format!(
+            "member 'born': sample {k} at level {b} (input samples: 0; others: 0..{levels})"
+        )));
+    }
+    let (_, added_at) =
+        int_array(take("added_at")?, "added_at", &[Some(3), Some(s - inputs)]).map_err(&bad)?;
+    let added_at = interleaved(&added_at, 3, 1);
+    let (_, normals) = int_array(
+        take("normals")?,
+        "normals",
+        &[Some(levels + 1), Some(2), Some(s)],
+    )
+    .map_err(&bad)?;
+    let normals = interleaved(&normals, 2, levels + 1);
+    let (_, normal_details) = int_array(
+        take("normal_details")?,
+        "normal_details",
+        &[Some(levels), Some(s)],
+    )
+    .map_err(&bad)?;
+    let (_, residuals) = int_array(
+        take("residuals")?,
+        "residuals",
+        &[Some(levels), Some(3), Some(s)],
+    )
+    .map_err(&bad)?;
+    let residuals = interleaved(&residuals, 3, levels);
+    let origin = f64_array(take("phi_origin")?, "phi_origin", &[Some(3)])
+        .map_err(&bad)?
+        .1;
+    let voxel = positive(take("phi_voxel")?, "phi_voxel").map_err(&bad)?;
+    let phi_far = positive(take("phi_far")?, "phi_far").map_err(&bad)?;
+    let (phi_dims, phi) = match take("phi")? {
+        NpyArray {
+            shape,
+            data: NpyData::I8(v),
+        } if shape.len() == 3 => ([shape[2], shape[1], shape[0]], v),
+        _ => return Err(bad("member 'phi' is not an int8 3-D array".into())),
+    };
+    let need = decoded_bytes(s, levels, phi.len());
+    if need > max_bytes {
+        return Err(bad(format!(
+            "decoding {s} samples of {levels} levels and a {}×{}×{} φ needs {}, more than the \
+             {} memory limit: raise --max-memory",
+            phi_dims[0],
+            phi_dims[1],
+            phi_dims[2],
+            crate::grid::spec::format_bytes(need),
+            crate::grid::spec::format_bytes(max_bytes)
+        )));
+    }
+    let triples = |v: Vec<f64>| v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let compact = CompactMsr {
+        faces: faces.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        vertices: triples(vertices),
+        extra_face: extra_face.iter().map(|&f| f as u32).collect(),
+        extra_bary: triples(extra_bary),
+        quantum,
+        birth_quantum,
+        snap,
+        added_at,
+        born: born.iter().map(|&b| b as u32).collect(),
+        normals,
+        normal_details,
+        residuals,
+        times,
+        phi,
+        phi_dims,
+        phi_origin: [origin[0], origin[1], origin[2]],
+        phi_voxel: voxel,
+        phi_far,
+        params,
+    };
+    decode_msr(&compact).map_err(bad)
+}
+
+/// `v`, `blocks` blocks of rows of `k` values, as `blocks` blocks of `k` planes (one per
+/// column): deflate and bzip2 pack each column's similar values better together.
+fn planes(v: &[i32], k: usize, blocks: usize) -> Vec<i32> {
+    let per = v.len() / blocks.max(1);
+    let rows = per / k;
+    let mut out = Vec::with_capacity(v.len());
+    for b in v.chunks_exact(per.max(1)) {
+        for c in 0..k {
+            out.extend((0..rows).map(|r| b[r * k + c]));
+        }
+    }
+    out
+}
+
+/// The inverse of [`planes`].
+fn interleaved(v: &[i32], k: usize, blocks: usize) -> Vec<i32> {
+    let per = v.len() / blocks.max(1);
+    let rows = per / k;
+    let mut out = Vec::with_capacity(v.len());
+    for b in v.chunks_exact(per.max(1)) {
+        for r in 0..rows {
+            out.extend((0..k).map(|c| b[c * rows + r]));
+        }
+    }
+    out
+}
+
+/// A positive finite float64 scalar.
+fn positive(a: NpyArray, name: &str) -> std::result::Result<f64, String> {
+    let v = f64_array(a, name, &[])?.1[0];
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("member '{name}': {v} is not positive"))
+    }
+}
+
+/// An int8/int16/int32 array whose shape matches `want` (None: any length on that axis).
+fn int_array(
+    a: NpyArray,
+    name: &str,
+    want: &[Option<usize>],
+) -> std::result::Result<(Vec<usize>, Vec<i32>), String> {
+    let fits = a.shape.len() == want.len()
+        && a.shape
+            .iter()
+            .zip(want)
+            .all(|(d, w)| w.is_none_or(|w| *d == w));
+    match a.data.to_i32() {
+        Some(v) if fits => Ok((a.shape, v)),
+        _ => {
+            let want: Vec<String> = want
+                .iter()
+                .map(|w| w.map_or("any".to_string(), |n| n.to_string()))
+                .collect();
+            Err(format!(
+                "member '{name}' is not an int8, int16 or int32 array of shape ({}) (found \
+                 shape {:?})",
+                want.join(", "),
+                a.shape
+            ))
+        }
+    }
 }
 
 /// The parameters must describe a decomposition this build can have written: at least one level

@@ -21,5 +21,6 @@ pub use histogram::{histogram, histogram_grid, Histogram, HistogramFigure, Histo
 pub use image::{write_png, RgbImage};
 pub use render::{render_mesh, render_strip, Camera, Panel, RenderOptions, StripOptions};
 pub use repair_picture::{
-    panel_layout, render_repair, repair_picture, repair_view, RepairPictureOptions, RepairView,
+    picture_layout, render_repair, repair_picture, repair_view, PictureLayout,
+    RepairPictureOptions, RepairView,
 };

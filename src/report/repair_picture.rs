@@ -1,14 +1,15 @@
-//! The before/after picture of a repair (issue 6, point 4; `--picture P.png`): two panels side
-//! by side, "input" and "repaired", drawn with one camera, as in Figure 3 of Dong, Chien, Shen
-//! and Osher (row 1: the vessel before inpainting with the regions marked by red circles; row 3:
-//! the inpainted regions shown in red).
+//! The before/after picture of a repair (issue 6, point 4, and issue 23, point 6; `--picture
+//! P.png`): two rows, "input" (the mesh as read, its holes open) and "repaired", each seen in
+//! three views with one scale, as in Figure 3 of Dong, Chien, Shen and Osher (row 1: the vessel
+//! before inpainting with the regions marked by red circles; row 3: the inpainted regions shown
+//! in red); under them the report's figures and a scale bar.
 //!
 //! - Framing: the context box is the bounding box of the balls of D grown ×[`CONTEXT_GROWTH`]
 //!   about its centre; only the triangles whose centroid lies in it (or that touch D) are drawn,
-//!   so the rest of a large vessel tree neither hides D nor shrinks it to a dot. The camera is
-//!   orthographic and fitted to what is drawn (both meshes and the balls' discs), one scale for
-//!   both panels.
-//! - View direction ([`repair_view`]): perpendicular to the vessel, D face on. From the
+//!   so the rest of a large vessel tree neither hides D nor shrinks it to a dot. The cameras are
+//!   orthographic, each fitted to what it shows (both meshes and the balls' discs), one scale
+//!   for all six panels (so one scale bar holds for all).
+//! - Views: "front" ([`repair_view`]): perpendicular to the vessel, D face on. From the
 //!   normal tensor Σ w A n nᵀ of the repaired mesh's triangles in the box, weighted by area A
 //!   and by nearness to D, w = exp(−d²/2r²) (d the distance to a ball's centre, r its radius;
 //!   the largest over the balls), so that a bend or branch away from D counts little: its
@@ -20,20 +21,27 @@
 //!   from outside. All of this is sign-free in the normals: the mesh's orientation does not
 //!   matter. When the balls' centre lies on the axis (or there is no ball) the camera looks
 //!   along the dominant normal of the triangles in D (of those in the box when D holds none),
-//!   made orthogonal to the axis, from the side where D's centroid is nearer.
+//!   made orthogonal to the axis, from the side where D's centroid is nearer. "top": turned a
+//!   quarter about the vessel's axis (looking down the front view's up); "oblique": the front
+//!   view turned 45° about its up, looking partly along the vessel.
+//! - Colours: grey surfaces; red only what the repair added: the repaired mesh's triangles whose
+//!   centroid lies farther than `added_distance` (half a voxel from `repair`) from the input
+//!   surface, so the kept wall inside D stays grey and a repair that changed nothing shows no
+//!   red; each ball's outline (its orthographic projection, a circle) in dark red on the input.
 //! - Drawing: a z-buffered scan conversion with 2×2 supersampling, two-sided Lambert shading
-//!   plus ambient (as [`super::render`]), but with one colour per triangle: grey surfaces, the
-//!   repaired mesh's triangles in D (a corner in some ball) red, the input's tinted light red,
-//!   and each ball's outline (its orthographic projection, a circle) in dark red on the input.
+//!   plus ambient (as [`super::render`]), one colour per triangle.
 //!
-//! Sizes are in pixels; world units are those of the meshes (never assumed to be mm).
+//! Sizes are in pixels; world units are those of the meshes, named on the scale bar by
+//! `unit` (never assumed to be mm).
 
 use super::image::{write_png, RgbImage};
 use super::raster::{vertex_normals, Lighting, ZBuffer};
-use super::text::{draw_text, HAlign};
+use super::text::{draw_text, text_width, HAlign};
+use crate::bvh::MeshBvh;
 use crate::inpaint::region::Ball;
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
+use rayon::prelude::*;
 use std::path::Path;
 
 /// Factor by which the bounding box of the balls is grown (about its centre) into the context
@@ -41,10 +49,8 @@ use std::path::Path;
 pub const CONTEXT_GROWTH: f64 = 2.5;
 /// Colour of surfaces outside D.
 pub const SURFACE_GREY: [u8; 3] = [200, 200, 200];
-/// Colour of the repaired mesh's triangles in D.
+/// Colour of the triangles the repair added.
 pub const REPAIRED_RED: [u8; 3] = [220, 40, 35];
-/// Colour of the input mesh's triangles in D.
-pub const INPUT_TINT: [u8; 3] = [245, 175, 165];
 /// Colour of the balls' outlines on the input panel.
 pub const OUTLINE_RED: [u8; 3] = [170, 10, 10];
 /// Colour of the pixels no surface covers.
@@ -54,7 +60,7 @@ pub const BACKGROUND: [u8; 3] = [255, 255, 255];
 const MAX_SIDE: u32 = 4096;
 /// Smallest accepted width or height, pixels.
 const MIN_SIDE: u32 = 32;
-/// Pixels between the two panels.
+/// Pixels between the panels.
 const GAP: u32 = 8;
 /// Blank border of each panel, as a fraction of its width and height.
 const MARGIN: f64 = 0.04;
@@ -63,23 +69,39 @@ const LIGHT: [f64; 3] = [-0.35, 0.45, 0.82];
 /// Ambient part of the lighting; the rest is Lambertian.
 const AMBIENT: f64 = 0.3;
 
-/// Size of the picture.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// Size and captions of the picture.
+#[derive(Clone, Debug, PartialEq)]
 pub struct RepairPictureOptions {
-    /// Width of the whole picture (both panels), pixels, in [32, 4096].
+    /// Width of the whole picture, pixels, in [32, 4096].
     pub width: u32,
-    /// Height of the whole picture (titles and panels), pixels, in [32, 4096].
+    /// Height of the whole picture (titles, panels, figures), pixels, in [32, 4096].
     pub height: u32,
+    /// A repaired triangle whose centroid is farther than this from the input surface was
+    /// added by the repair and is drawn red (world units; `repair` gives half its voxel). At
+    /// 0, anything farther than a millionth of the context box's diagonal.
+    pub added_distance: f64,
+    /// Name of the world unit on the scale bar ("mm"); empty: "units".
+    pub unit: String,
+    /// Lines of the report's figures written under the panels.
+    pub figures: Vec<String>,
 }
 
 impl Default for RepairPictureOptions {
     fn default() -> Self {
         RepairPictureOptions {
             width: 1200,
-            height: 600,
+            height: 800,
+            added_distance: 0.0,
+            unit: String::new(),
+            figures: Vec::new(),
         }
     }
 }
+
+/// The views of each row, left to right (see the module docs).
+pub const VIEW_NAMES: [&str; 3] = ["front", "top", "oblique"];
+/// The rows, top to bottom.
+pub const ROW_NAMES: [&str; 2] = ["input", "repaired"];
 
 /// The camera of a repair picture: the context box and the view (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -341,44 +363,87 @@ fn with_largest_component_negative(v: Vector3<f64>) -> Vector3<f64> {
     }
 }
 
-/// One panel's triangles: the face indices to draw and their colours.
+/// One row's triangles: the face indices to draw and their colours.
 struct Scene<'a> {
     mesh: &'a TriMesh,
     faces: Vec<([u32; 3], [u8; 3])>,
 }
 
-/// The triangles of `mesh` that are drawn (centroid in the context box, or a corner in D), in
-/// `in_d` when a corner is in some ball, else in grey. Faces with out-of-range indices or
-/// non-finite corners are left out.
-fn scene<'a>(mesh: &'a TriMesh, view: &RepairView, balls: &[Ball], in_d: [u8; 3]) -> Scene<'a> {
+/// Faces of `mesh` with indices in range and finite corners.
+fn drawable<'a>(mesh: &'a TriMesh) -> impl Iterator<Item = &'a [u32; 3]> + 'a {
     let n = mesh.vertices.len();
-    let balls: Vec<&Ball> = balls.iter().filter(|b| usable(b)).collect();
-    let in_ball: Vec<bool> = mesh
-        .vertices
-        .iter()
-        .map(|p| balls.iter().any(|b| b.contains(p)))
-        .collect();
-    let faces = mesh
-        .faces
-        .iter()
+    mesh.faces.iter().filter(move |f| {
+        f.iter()
+            .all(|&i| (i as usize) < n && mesh.vertices[i as usize].iter().all(|c| c.is_finite()))
+    })
+}
+
+fn centroid(mesh: &TriMesh, f: &[u32; 3]) -> Point3<f64> {
+    let [a, b, c] = f.map(|i| mesh.vertices[i as usize].coords);
+    Point3::from((a + b + c) / 3.0)
+}
+
+/// The triangles of `mesh` that are drawn: centroid in the context box, or a corner in D.
+fn shown(mesh: &TriMesh, view: &RepairView, balls: &[&Ball]) -> Vec<[u32; 3]> {
+    drawable(mesh)
         .filter(|f| {
-            f.iter().all(|&i| {
-                (i as usize) < n && mesh.vertices[i as usize].iter().all(|c| c.is_finite())
-            })
+            view.contains(&centroid(mesh, f))
+                || f.iter()
+                    .any(|&i| balls.iter().any(|b| b.contains(&mesh.vertices[i as usize])))
         })
-        .filter_map(|f| {
-            let touches_d = f.iter().any(|&i| in_ball[i as usize]);
-            let [a, b, c] = f.map(|i| mesh.vertices[i as usize].coords);
-            let centroid = Point3::from((a + b + c) / 3.0);
-            (touches_d || view.contains(&centroid))
-                .then_some((*f, if touches_d { in_d } else { SURFACE_GREY }))
-        })
+        .copied()
+        .collect()
+}
+
+/// The input's row: its shown triangles, grey.
+fn input_scene<'a>(mesh: &'a TriMesh, view: &RepairView, balls: &[&Ball]) -> Scene<'a> {
+    let faces = shown(mesh, view, balls)
+        .into_iter()
+        .map(|f| (f, SURFACE_GREY))
         .collect();
     Scene { mesh, faces }
 }
 
-/// The orthographic projection shared by both panels: image-plane centre (right, up
-/// coordinates) and pixels per world unit, for a panel of `width × height`.
+/// The repaired row: its shown triangles, red where the centroid lies farther than `reach`
+/// from the input's shown triangles (and those within `reach` of the box), else grey.
+fn repaired_scene<'a>(
+    after: &'a TriMesh,
+    before: &TriMesh,
+    view: &RepairView,
+    balls: &[&Ball],
+    reach: f64,
+) -> Scene<'a> {
+    let grown = RepairView {
+        min: view.min - Vector3::repeat(reach),
+        max: view.max + Vector3::repeat(reach),
+        ..*view
+    };
+    // The input near what is drawn: a triangle of the input that could be within `reach` of a
+    // shown centroid has a corner in the grown box or in D, or is as large as the box.
+    let near: Vec<[u32; 3]> = drawable(before)
+        .filter(|f| {
+            f.iter().any(|&i| {
+                let p = &before.vertices[i as usize];
+                grown.contains(p) || balls.iter().any(|b| b.contains(p))
+            }) || grown.contains(&centroid(before, f))
+        })
+        .copied()
+        .collect();
+    let bvh = MeshBvh::new(&TriMesh::new(before.vertices.clone(), near));
+    let faces = shown(after, view, balls)
+        .into_iter()
+        .map(|f| {
+            let added = bvh
+                .closest_point_within(&centroid(after, &f), reach)
+                .is_none();
+            (f, if added { REPAIRED_RED } else { SURFACE_GREY })
+        })
+        .collect();
+    Scene { mesh: after, faces }
+}
+
+/// One camera: its directions, the image-plane centre (right, up coordinates) and pixels per
+/// world unit, shared by a panel of each row.
 #[derive(Clone, Copy, Debug)]
 struct Projection {
     right: Vector3<f64>,
@@ -401,64 +466,82 @@ impl Projection {
     }
 }
 
-/// Fits the drawn triangles of both scenes and the balls' discs into a `w × h` panel.
-fn fit(view: &RepairView, scenes: &[&Scene], balls: &[Ball], w: u32, h: u32) -> Projection {
-    let mut b = [
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    let add = |b: &mut [f64; 4], p: &Point3<f64>, r: f64| {
-        let (x, y) = (view.right.dot(&p.coords), view.up.dot(&p.coords));
-        *b = [
-            b[0].min(x - r),
-            b[1].max(x + r),
-            b[2].min(y - r),
-            b[3].max(y + r),
+/// The three cameras (front, top, oblique; see the module docs) of `view`.
+fn cameras(view: &RepairView) -> [(Vector3<f64>, Vector3<f64>, Vector3<f64>); 3] {
+    let (d, u, r) = (view.view, view.up, view.right);
+    // (view, up, right) with right = view × up (r = d × u, so r × u = −d).
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    [(d, u, r), (-u, d, r), ((d + r) * h, u, (r - d) * h)]
+}
+
+/// Fits the drawn triangles of both scenes and the balls' discs, seen by each camera, into a
+/// `w × h` panel: each camera centred on what it sees, all with the smallest of their scales.
+fn fit(view: &RepairView, scenes: &[&Scene], balls: &[&Ball], w: u32, h: u32) -> [Projection; 3] {
+    let fitted = cameras(view).map(|(v, u, r)| {
+        let mut b = [
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
         ];
-    };
-    for s in scenes {
-        for (f, _) in &s.faces {
-            for &i in f {
-                add(&mut b, &s.mesh.vertices[i as usize], 0.0);
+        let add = |b: &mut [f64; 4], p: &Point3<f64>, rad: f64| {
+            let (x, y) = (r.dot(&p.coords), u.dot(&p.coords));
+            *b = [
+                b[0].min(x - rad),
+                b[1].max(x + rad),
+                b[2].min(y - rad),
+                b[3].max(y + rad),
+            ];
+        };
+        for s in scenes {
+            for (f, _) in &s.faces {
+                for &i in f {
+                    add(&mut b, &s.mesh.vertices[i as usize], 0.0);
+                }
             }
         }
-    }
-    for ball in balls.iter().filter(|b| usable(b)) {
-        add(&mut b, &ball.center, ball.radius);
-    }
-    if !b.iter().all(|v| v.is_finite()) {
-        // Nothing to draw: frame the context box.
-        for k in 0..8 {
-            let p = Point3::new(
-                if k & 1 == 0 { view.min.x } else { view.max.x },
-                if k & 2 == 0 { view.min.y } else { view.max.y },
-                if k & 4 == 0 { view.min.z } else { view.max.z },
-            );
-            add(&mut b, &p, 0.0);
+        for ball in balls {
+            add(&mut b, &ball.center, ball.radius);
         }
-    }
-    let (ew, eh) = (b[1] - b[0], b[3] - b[2]);
-    let usable_w = w as f64 * (1.0 - 2.0 * MARGIN);
-    let usable_h = h as f64 * (1.0 - 2.0 * MARGIN);
-    let s = (if ew > 0.0 {
-        usable_w / ew
-    } else {
-        f64::INFINITY
-    })
-    .min(if eh > 0.0 {
-        usable_h / eh
-    } else {
-        f64::INFINITY
+        if !b.iter().all(|v| v.is_finite()) {
+            // Nothing to draw: frame the context box.
+            for k in 0..8 {
+                let p = Point3::new(
+                    if k & 1 == 0 { view.min.x } else { view.max.x },
+                    if k & 2 == 0 { view.min.y } else { view.max.y },
+                    if k & 4 == 0 { view.min.z } else { view.max.z },
+                );
+                add(&mut b, &p, 0.0);
+            }
+        }
+        let (ew, eh) = (b[1] - b[0], b[3] - b[2]);
+        let usable_w = w as f64 * (1.0 - 2.0 * MARGIN);
+        let usable_h = h as f64 * (1.0 - 2.0 * MARGIN);
+        let s = (if ew > 0.0 {
+            usable_w / ew
+        } else {
+            f64::INFINITY
+        })
+        .min(if eh > 0.0 {
+            usable_h / eh
+        } else {
+            f64::INFINITY
+        });
+        (v, u, r, [0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3])], s)
     });
-    Projection {
-        right: view.right,
-        up: view.up,
-        view: view.view,
-        centre: [0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3])],
-        scale: if s.is_finite() && s > 0.0 { s } else { 1.0 },
-    }
+    let scale = fitted
+        .iter()
+        .map(|f| f.4)
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let scale = if scale.is_finite() { scale } else { 1.0 };
+    fitted.map(|(view, up, right, centre, _)| Projection {
+        right,
+        up,
+        view,
+        centre,
+        scale,
+    })
 }
 
 /// Draws a scene into a `w × h` panel: z-buffer, 2×2 supersampling, two-sided Lambert shading
@@ -531,24 +614,77 @@ fn draw_circle(image: &mut RgbImage, cx: f64, cy: f64, radius: f64, color: [u8; 
     }
 }
 
-/// Where the two panels lie in a picture of size `opts`: `[x, y, width, height]` in pixels of
-/// the "input" panel and of the "repaired" one. The titles take the top 7% of the height
-/// (16 to 64 pixels), the panels the rest, each (width − 8) / 2 wide, 8 pixels apart.
-pub fn panel_layout(opts: &RepairPictureOptions) -> [[u32; 4]; 2] {
-    let title_h = (opts.height as f64 * 0.07).clamp(16.0, 64.0) as u32;
-    let title_h = title_h.min(opts.height / 2);
-    let panel_w = opts.width.saturating_sub(GAP) / 2;
-    let panel_h = opts.height - title_h;
-    [
-        [0, title_h, panel_w, panel_h],
-        [opts.width - panel_w, title_h, panel_w, panel_h],
-    ]
+/// Where the parts of a picture of size `opts` lie, `[x, y, width, height]` in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PictureLayout {
+    /// `panels[row][view]`: rows input, repaired ([`ROW_NAMES`]); views front, top, oblique
+    /// ([`VIEW_NAMES`]).
+    pub panels: [[[u32; 4]; 3]; 2],
+    /// The strip under the panels with the figures and the scale bar.
+    pub caption: [u32; 4],
+    /// Height of a line of text, pixels.
+    pub line: u32,
 }
 
-/// The before/after picture as an image (see the module docs): panel "input" (`before`, its
-/// triangles in D tinted light red, the balls outlined) on the left, panel "repaired" (`after`,
-/// its triangles in D red) on the right, one camera ([`repair_view`] of `after`). Meshes with
-/// nothing in the context box give blank panels. Fails when the size is out of range.
+/// The layout of a picture of size `opts`: a title line (the views' names), two rows of three
+/// panels 8 pixels apart, each row's name in its first panel's corner, and a caption strip of
+/// one line per figure line plus the scale bar's (a line is 3% of the height, 12 to 40 pixels).
+pub fn picture_layout(opts: &RepairPictureOptions) -> PictureLayout {
+    let line = ((opts.height as f64 * 0.03).clamp(12.0, 40.0) as u32).min(opts.height / 8);
+    let title = line + line / 2;
+    let lines = opts.figures.len() as u32 + 1;
+    let caption_h = (lines * line + line / 2).min(opts.height / 3);
+    let rows_h = opts.height.saturating_sub(title + caption_h);
+    let panel_h = rows_h.saturating_sub(GAP) / 2;
+    let panel_w = opts.width.saturating_sub(2 * GAP) / 3;
+    let mut panels = [[[0; 4]; 3]; 2];
+    for (r, row) in panels.iter_mut().enumerate() {
+        for (c, p) in row.iter_mut().enumerate() {
+            *p = [
+                c as u32 * (panel_w + GAP),
+                title + r as u32 * (panel_h + GAP),
+                panel_w,
+                panel_h,
+            ];
+        }
+    }
+    PictureLayout {
+        panels,
+        caption: [0, opts.height - caption_h, opts.width, caption_h],
+        line,
+    }
+}
+
+/// The largest 1, 2 or 5 × 10^k not above `x` (x > 0, finite).
+fn round_length(x: f64) -> f64 {
+    let p = 10f64.powf(x.log10().floor());
+    [5.0, 2.0, 1.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|&v| v <= x)
+        .unwrap_or(p)
+}
+
+/// Draws a black bar `length` pixels long ending at column `x1` on row `y`, with end ticks.
+fn draw_bar(image: &mut RgbImage, x1: u32, y: u32, length: u32) {
+    let x0 = x1.saturating_sub(length);
+    for x in x0..=x1 {
+        for dy in 0..3 {
+            image.set(x, y + dy, [0, 0, 0]);
+        }
+    }
+    for x in [x0, x1] {
+        for yy in y.saturating_sub(5)..y + 8 {
+            image.set(x, yy, [0, 0, 0]);
+        }
+    }
+}
+
+/// The before/after picture as an image (see the module docs): the "input" row (`before` as
+/// read, grey, the balls outlined) above the "repaired" row (`after`, what the repair added
+/// red), each in the front, top and oblique views of [`repair_view`] of `after`, one scale; under
+/// them `opts.figures` and a scale bar in `opts.unit`. Meshes with nothing in the context box
+/// give blank panels. Fails when the size is out of range.
 pub fn repair_picture(
     before: &TriMesh,
     after: &TriMesh,
@@ -563,32 +699,109 @@ pub fn repair_picture(
             )));
         }
     }
-    let [[_, title_h, panel_w, panel_h], [right_x, _, _, _]] = panel_layout(opts);
-
-    let view = repair_view(after, balls);
-    let input = scene(before, &view, balls, INPUT_TINT);
-    let repaired = scene(after, &view, balls, REPAIRED_RED);
-    let proj = fit(&view, &[&input, &repaired], balls, panel_w, panel_h);
-
+    let layout = picture_layout(opts);
+    let [_, _, panel_w, panel_h] = layout.panels[0][0];
     let mut image = RgbImage::new(width, height, BACKGROUND);
-    let mut left = draw_scene(&input, &proj, panel_w, panel_h);
-    for ball in balls.iter().filter(|b| usable(b)) {
-        let [cx, cy, _] = proj.project(&ball.center, panel_w as f64, panel_h as f64, 1.0);
-        draw_circle(&mut left, cx, cy, ball.radius * proj.scale, OUTLINE_RED);
-    }
-    let right = draw_scene(&repaired, &proj, panel_w, panel_h);
-    image.blit(&left, 0, title_h as i64);
-    image.blit(&right, right_x as i64, title_h as i64);
-    let size = title_h as f64 * 0.7;
-    for (title, x) in [("input", panel_w / 2), ("repaired", right_x + panel_w / 2)] {
+    let size = layout.line as f64 * 0.8;
+    for (c, name) in VIEW_NAMES.iter().enumerate() {
+        let [x, _, w, _] = layout.panels[0][c];
         draw_text(
             &mut image,
-            title,
-            x as i32,
-            ((title_h as f64 - size) / 2.0) as i32,
+            name,
+            (x + w / 2) as i32,
+            (layout.line / 4) as i32,
             size,
             [0, 0, 0],
             HAlign::Center,
+        )?;
+    }
+    if panel_w < 8 || panel_h < 8 {
+        return Ok(image);
+    }
+
+    let view = repair_view(after, balls);
+    let usable: Vec<&Ball> = balls.iter().filter(|b| usable(b)).collect();
+    let diagonal = (view.max - view.min).norm();
+    let reach = if opts.added_distance > 0.0 && opts.added_distance.is_finite() {
+        opts.added_distance
+    } else {
+        1e-6 * diagonal
+    };
+    let input = input_scene(before, &view, &usable);
+    let repaired = repaired_scene(after, before, &view, &usable, reach);
+    let projections = fit(&view, &[&input, &repaired], &usable, panel_w, panel_h);
+
+    // The six panels drawn in parallel (the rasteriser is most of the picture's time).
+    let scenes = [&input, &repaired];
+    let panels: Vec<RgbImage> = (0..6)
+        .into_par_iter()
+        .map(|k| {
+            let (r, proj) = (k / 3, &projections[k % 3]);
+            let mut panel = draw_scene(scenes[r], proj, panel_w, panel_h);
+            if r == 0 {
+                for ball in &usable {
+                    let [cx, cy, _] =
+                        proj.project(&ball.center, panel_w as f64, panel_h as f64, 1.0);
+                    draw_circle(&mut panel, cx, cy, ball.radius * proj.scale, OUTLINE_RED);
+                }
+            }
+            panel
+        })
+        .collect();
+    for (k, panel) in panels.iter().enumerate() {
+        let [x, y, _, _] = layout.panels[k / 3][k % 3];
+        image.blit(panel, x as i64, y as i64);
+    }
+    for (r, name) in ROW_NAMES.iter().enumerate() {
+        let [x, y, _, _] = layout.panels[r][0];
+        draw_text(
+            &mut image,
+            name,
+            (x + 6) as i32,
+            (y + 4) as i32,
+            size,
+            [0, 0, 0],
+            HAlign::Left,
+        )?;
+    }
+
+    // The figures, then the scale bar: a round length near a quarter of a panel's width.
+    let [cx, cy, cw, _] = layout.caption;
+    let line = layout.line;
+    for (k, text) in opts.figures.iter().enumerate() {
+        draw_text(
+            &mut image,
+            text,
+            (cx + 8) as i32,
+            (cy + line / 4 + k as u32 * line) as i32,
+            size,
+            [0, 0, 0],
+            HAlign::Left,
+        )?;
+    }
+    let scale = projections[0].scale;
+    let world = panel_w as f64 / 4.0 / scale;
+    if world.is_finite() && world > 0.0 {
+        let length = round_length(world);
+        let px = (length * scale).round() as u32;
+        let unit = if opts.unit.is_empty() {
+            "units"
+        } else {
+            &opts.unit
+        };
+        let y = cy + line / 4 + opts.figures.len() as u32 * line;
+        let x1 = cx + cw.saturating_sub(16);
+        let label = format!("{length} {unit}");
+        let label_w = text_width(&label, size).ceil() as u32;
+        draw_bar(&mut image, x1, y + line / 2, px);
+        draw_text(
+            &mut image,
+            &label,
+            x1.saturating_sub(px + 12 + label_w) as i32,
+            y as i32,
+            size,
+            [0, 0, 0],
+            HAlign::Left,
         )?;
     }
     Ok(image)
