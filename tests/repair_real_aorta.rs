@@ -153,3 +153,72 @@ fn the_inward_capped_aorta_is_repaired_outward() {
     assert!(hd <= 2.5, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
 }
+
+#[test]
+fn the_readme_first_command_repairs_the_shipped_hole() {
+    // The README's first command, on data/aorta_abdominal_open_ends_hole.stl (the chop above,
+    // shipped): the hole found and filled, the three ends capped, every output written.
+    let readme = std::fs::read_to_string(data_dir().join("../README.md")).unwrap();
+    let line = readme
+        .lines()
+        .find(|l| l.starts_with("cargo run --release -- repair "))
+        .expect("the README's first command");
+    let dir = tempfile::tempdir().unwrap();
+    let args: Vec<String> = line
+        .split_whitespace()
+        .skip(4)
+        .map(|a| match a {
+            a if a.starts_with("data/") => data_dir().join(&a[5..]).to_string_lossy().into(),
+            a if a.starts_with("aorta_") => dir.path().join(a).to_string_lossy().into(),
+            a => a.to_string(),
+        })
+        .collect();
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let run = vesselmsr(&args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert_eq!(stdout.matches(": hole").count(), 1, "{stdout}");
+    assert_eq!(stdout.matches("open vessel end").count(), 3, "{stdout}");
+    for out in [
+        "aorta_repaired.stl",
+        "aorta_report.json",
+        "aorta_repair.png",
+    ] {
+        assert!(dir.path().join(out).is_file(), "{out} not written");
+    }
+    let repaired = read_mesh(&dir.path().join("aorta_repaired.stl")).unwrap();
+    let info = mesh_info(&repaired);
+    assert!(info.watertight && info.signed_volume > 0.0);
+}
+
+#[test]
+fn stenoses_on_a_vessel_without_a_narrowing_write_it_and_say_so() {
+    // Like --holes on a mesh with no hole: exit 0, the mesh written (ends capped), a notice.
+    let dir = tempfile::tempdir().unwrap();
+    let (out, report) = (dir.path().join("out.stl"), dir.path().join("r.json"));
+    let mesh = data_dir().join("aorta_abdominal_open_ends.stl");
+    let run = vesselmsr(&[
+        "repair",
+        mesh.to_str().unwrap(),
+        "--stenoses",
+        "-o",
+        out.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert!(
+        report["notices"].to_string().contains("no narrowing"),
+        "{report}"
+    );
+    assert!(mesh_info(&read_mesh(&out).unwrap()).watertight);
+}

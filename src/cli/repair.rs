@@ -261,10 +261,7 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
             .map(|h| h.lesion_regions(p))
             .unwrap_or_default();
         if found.is_empty() {
-            ctx.notice(&format!(
-                "{}: no narrowing of {p}% or more found",
-                args.mesh.display()
-            ));
+            notices.push(format!("no narrowing of {p}% or more found"));
         }
         for b in found {
             balls.push(b);
@@ -305,7 +302,9 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
             })
             .collect();
     }
-    let nothing_to_do = args.holes && balls.is_empty();
+    // Asked to find holes or narrowings and none found: the mesh is written as it is (ends
+    // capped), with a report saying so, exit 0 (a script over a cohort goes on).
+    let nothing_to_do = (args.holes || args.stenoses.is_some()) && balls.is_empty();
     if nothing_to_do && args.picture.is_some() {
         notices.push("no picture written: nothing was inpainted".into());
     }

@@ -486,25 +486,23 @@ fn read_compact(path: &Path, mut m: HashMap<String, NpyArray>, max_bytes: u64) -
 /// `v`, `blocks` blocks of rows of `k` values, as `blocks` blocks of `k` planes (one per
 /// column): deflate and bzip2 pack each column's similar values better together.
 fn planes(v: &[i32], k: usize, blocks: usize) -> Vec<i32> {
-    let per = v.len() / blocks.max(1);
-    let rows = per / k;
-    let mut out = Vec::with_capacity(v.len());
-    for b in v.chunks_exact(per.max(1)) {
-        for c in 0..k {
-            out.extend((0..rows).map(|r| b[r * k + c]));
-        }
-    }
-    out
+    let rows = v.len() / blocks.max(1) / k.max(1);
+    transpose_blocks(v, rows, k, blocks)
 }
 
 /// The inverse of [`planes`].
 fn interleaved(v: &[i32], k: usize, blocks: usize) -> Vec<i32> {
+    let rows = v.len() / blocks.max(1) / k.max(1);
+    transpose_blocks(v, k, rows, blocks)
+}
+
+/// Each of the `blocks` blocks of `v`, a `rows` × `cols` matrix stored by rows, transposed.
+fn transpose_blocks(v: &[i32], rows: usize, cols: usize, blocks: usize) -> Vec<i32> {
     let per = v.len() / blocks.max(1);
-    let rows = per / k;
     let mut out = Vec::with_capacity(v.len());
     for b in v.chunks_exact(per.max(1)) {
-        for r in 0..rows {
-            out.extend((0..k).map(|c| b[c * rows + r]));
+        for c in 0..cols {
+            out.extend((0..rows).map(|r| b[r * cols + c]));
         }
     }
     out
