@@ -45,43 +45,48 @@
 //! 2 decimals; ties by |volume error|); and our whole command's time against MeshLib's filler
 //! call on the chops.
 //!
-//! Measured 2026-12-04 with the `centerline` fill (the default since; main after the self-checks
-//! and stitch retries), load 1.5–1.8, 25 cases in 149 s, `cargo bench --bench repair_real`:
-//! ours median 3.75h / 4.3% (3 of 25 within 1.5h and 5%, 10 within 3h; chops 4.39h, stenoses
-//! 9.99h, occlusions 2.46h); ours beats MeshLib on 16 of 25 (chops 8/15, stenoses 3/5, occlusions
-//! 5/5), pymeshfix on 20, pymeshlab on 21. Our whole command on a chop: median 2.21 s
-//! (0.60–4.03 s) against MeshLib's filler call 0.011 s (134×). Where ours still loses: chops next
-//! to a junction or on the aneurysm sac, narrowings whose region takes in a neighbouring vessel
-//! or the aortic bifurcation (over-filled by +13% to +50%), and the coronary's sharp bend
-//! (−21%). Per case (peers as below):
+//! Measured 2026-12-04 with the `centerline` fill after the session's changes (sections not read
+//! in a junction's flare nor across into another branch, the wall's details carried across D,
+//! the cheaper report and caps), an idle machine (load 1.5–2.3), 25 cases in 64.5 s,
+//! `cargo bench --bench repair_real`: ours median 3.47h / 3.3% (4 of 25 within 1.5h and 5%, 9
+//! within 3h; chops 4.22h, stenoses 6.21h, occlusions 2.04h); ours beats MeshLib on 17 of 25
+//! (chops 8/15, stenoses 4/5, occlusions 5/5), pymeshfix on 21, pymeshlab on 22. Our whole
+//! command on a chop: median 0.78 s (0.33–1.45 s; 12 of 15 under 1 s) against MeshLib's filler
+//! call 0.008 s (96×). Our report's NASCET for the 50% narrowings: 43.3, 36.1, 57.2, 41.6, 48.6%.
+//! Where ours still loses: chops next to a junction (the carotid's +48.7%, the aneurysm neck's
+//! 13.75h), narrowings whose region takes in a neighbouring vessel (the carotid's, +49.6%: the
+//! narrowings found there include false ones by the bulb), and the coronary's sharp bend
+//! (−22.6%). The coronary's stenosis takes 10 s (four narrowings found, one region 24.5 mm wide
+//! at a 0.2 mm voxel). Per case (peers as below; earlier today, before these changes: median
+//! 3.75h / 4.3%, 3 within 1.5h and 5%, MeshLib beaten on 16, whole command 2.21 s):
 //!
 //! | vessel | case | ours h / vol | ours s | MeshLib | pymeshfix | pymeshlab |
 //! |---|---|---|---|---|---|---|
-//! | aorta_abdominal_capped | chop#1 (junction) | 6.21 / -0.3% | 2.205 | 10.47 / +6.9% | 12.66 / +15.7% | 12.85 / -9.3% |
-//! | aorta_abdominal_capped | chop#2 (wall) | 4.39 / +4.6% | 2.417 | 8.77 / -10.6% | 20.92 / -26.8% | 5.52 / -6.3% |
-//! | aorta_abdominal_capped | chop#3 (wall) | 1.83 / -2.6% | 1.299 | 5.06 / -9.5% | 4.12 / -5.6% | 8.52 / -17.3% |
-//! | aorta_abdominal_capped | stenosis 50% | 6.55 / +12.9% | 1.819 | 7.19 / -30.4% | 7.19 / -30.4% | 7.19 / -30.4% |
-//! | aorta_abdominal_capped | occlusion | 2.72 / -0.7% | 1.561 | 12.84 / -23.6% | 21.61 / -69.9% | 13.18 / -42.0% |
-//! | aorta_abdominal_open_ends | chop#1 (junction) | 8.68 / +2.0% | 2.722 | 4.60 / -7.3% | 3.75 / -1.2% | 9.56 / -14.7% |
-//! | aorta_abdominal_open_ends | chop#2 (wall) | 4.48 / -0.3% | 4.035 | 8.76 / -7.3% | 8.72 / -6.2% | 19.10 / -19.4% |
-//! | aorta_abdominal_open_ends | chop#3 (wall) | 3.54 / +12.8% | 2.570 | 5.20 / -9.9% | 1.90 / -3.3% | 12.60 / -25.4% |
-//! | aorta_abdominal_open_ends | stenosis 50% | 13.80 / +42.1% | 2.463 | 8.51 / -28.2% | 8.51 / -28.2% | 8.51 / -28.2% |
-//! | aorta_abdominal_open_ends | occlusion | 3.75 / -1.8% | 1.649 | 14.12 / -26.3% | 24.05 / -73.5% | 11.78 / -44.3% |
-//! | carotid_bifurcation | chop#1 (junction) | 6.27 / +29.6% | 1.183 | 4.62 / +21.5% | 4.88 / +29.6% | 3.65 / +1.7% |
-//! | carotid_bifurcation | chop#2 (wall) | 2.15 / +2.2% | 1.127 | 1.25 / -3.1% | 4.74 / -10.9% | 6.78 / -23.9% |
-//! | carotid_bifurcation | chop#3 (wall) | 2.27 / -15.8% | 0.787 | 1.98 / -12.2% | 4.83 / -28.8% | 5.69 / -40.6% |
-//! | carotid_bifurcation | stenosis 50% | 9.99 / +49.6% | 3.622 | 4.96 / -33.7% | 4.96 / -33.7% | 4.96 / -33.7% |
-//! | carotid_bifurcation | occlusion | 0.84 / -0.4% | 1.125 | 10.03 / -19.4% | 17.95 / -74.2% | 9.94 / -45.6% |
-//! | ica_aneurysm_c0015 | chop#1 (junction) | 8.69 / +9.6% | 3.183 | 6.32 / +5.1% | 16.50 / +24.2% | 14.29 / -15.0% |
-//! | ica_aneurysm_c0015 | chop#2 (wall) | 3.39 / -4.3% | 3.577 | 11.42 / -11.3% | 28.30 / -32.4% | 22.51 / -23.3% |
-//! | ica_aneurysm_c0015 | chop#3 (wall) | 11.24 / +3.5% | 3.736 | 8.34 / -9.8% | 21.90 / -25.1% | 24.63 / -24.7% |
-//! | ica_aneurysm_c0015 | stenosis 50% | 12.37 / -11.9% | 4.154 | 14.86 / -35.3% | 14.86 / -35.3% | 14.86 / -35.3% |
-//! | ica_aneurysm_c0015 | occlusion | 2.46 / +0.5% | 2.216 | 27.66 / -19.9% | 48.58 / -69.9% | 25.52 / -40.5% |
-//! | coronary_stenosis_xray | chop#1 (bend 47°) | 5.61 / -21.5% | 0.732 | 3.55 / -24.5% | 6.03 / -42.3% | 2.04 / -17.5% |
-//! | coronary_stenosis_xray | chop#2 (wall) | 0.99 / -2.9% | 0.596 | 2.36 / -16.7% | 4.08 / -27.4% | 1.20 / -4.9% |
-//! | coronary_stenosis_xray | chop#3 (wall) | 1.81 / -8.8% | 0.626 | 3.81 / -22.0% | 7.25 / -42.2% | 4.46 / -24.0% |
-//! | coronary_stenosis_xray | stenosis 50% | 0.50 / -3.1% | 16.685 | 3.16 / -33.1% | 3.16 / -33.1% | 3.16 / -33.1% |
-//! | coronary_stenosis_xray | occlusion | beats / pymeshlab | of | 6.99 / 19.4% | 8.51 / 29.6% | 8.52 / 24.7% |
+//! | aorta_abdominal_capped | chop#1 (junction) | 6.08 / +3.3% | 0.782 | 10.47 / +6.9% | 12.66 / +15.7% | 12.85 / -9.3% |
+//! | aorta_abdominal_capped | chop#2 (wall) | 5.08 / +4.4% | 0.924 | 8.77 / -10.6% | 20.92 / -26.8% | 5.52 / -6.3% |
+//! | aorta_abdominal_capped | chop#3 (wall) | 1.80 / -2.9% | 0.555 | 5.06 / -9.5% | 4.12 / -5.6% | 8.52 / -17.3% |
+//! | aorta_abdominal_capped | stenosis 50% | 3.47 / +0.3% | 0.662 | 7.19 / -30.4% | 7.19 / -30.4% | 7.19 / -30.4% |
+//! | aorta_abdominal_capped | occlusion | 3.17 / +2.6% | 0.474 | 12.84 / -23.6% | 21.61 / -69.9% | 13.18 / -42.0% |
+//! | aorta_abdominal_open_ends | chop#1 (junction) | 8.68 / +0.2% | 0.877 | 4.60 / -7.3% | 3.75 / -1.2% | 9.56 / -14.7% |
+//! | aorta_abdominal_open_ends | chop#2 (wall) | 4.22 / +2.0% | 1.446 | 8.76 / -7.3% | 8.72 / -6.2% | 19.10 / -19.4% |
+//! | aorta_abdominal_open_ends | chop#3 (wall) | 3.27 / +8.6% | 0.842 | 5.20 / -9.9% | 1.90 / -3.3% | 12.60 / -25.4% |
+//! | aorta_abdominal_open_ends | stenosis 50% | 6.21 / -0.3% | 0.903 | 8.51 / -28.2% | 8.51 / -28.2% | 8.51 / -28.2% |
+//! | aorta_abdominal_open_ends | occlusion | 3.49 / -3.6% | 0.667 | 14.12 / -26.3% | 24.05 / -73.5% | 11.78 / -44.3% |
+//! | carotid_bifurcation | chop#1 (junction) | 7.98 / +48.7% | 0.495 | 4.62 / +21.5% | 4.88 / +29.6% | 3.65 / +1.7% |
+//! | carotid_bifurcation | chop#2 (wall) | 2.17 / +2.4% | 0.439 | 1.25 / -3.1% | 4.74 / -10.9% | 6.78 / -23.9% |
+//! | carotid_bifurcation | chop#3 (wall) | 2.29 / -16.3% | 0.386 | 1.98 / -12.2% | 4.83 / -28.8% | 5.69 / -40.6% |
+//! | carotid_bifurcation | stenosis 50% | 9.99 / +49.6% | 1.770 | 4.96 / -33.7% | 4.96 / -33.7% | 4.96 / -33.7% |
+//! | carotid_bifurcation | occlusion | 1.06 / -3.2% | 0.401 | 10.03 / -19.4% | 17.95 / -74.2% | 9.94 / -45.6% |
+//! | ica_aneurysm_c0015 | chop#1 (junction) | 13.75 / +12.6% | 0.828 | 6.32 / +5.1% | 16.50 / +24.2% | 14.29 / -15.0% |
+//! | ica_aneurysm_c0015 | chop#2 (wall) | 3.25 / -3.7% | 1.224 | 11.42 / -11.3% | 28.30 / -32.4% | 22.51 / -23.3% |
+//! | ica_aneurysm_c0015 | chop#3 (wall) | 8.37 / +1.8% | 1.377 | 8.34 / -9.8% | 21.90 / -25.1% | 24.63 / -24.7% |
+//! | ica_aneurysm_c0015 | stenosis 50% | 8.37 / -11.5% | 2.140 | 14.86 / -35.3% | 14.86 / -35.3% | 14.86 / -35.3% |
+//! | ica_aneurysm_c0015 | occlusion | 2.04 / +0.4% | 0.792 | 27.66 / -19.9% | 48.58 / -69.9% | 25.52 / -40.5% |
+//! | coronary_stenosis_xray | chop#1 (bend 47°) | 5.52 / -22.6% | 0.410 | 3.55 / -24.5% | 6.03 / -42.3% | 2.04 / -17.5% |
+//! | coronary_stenosis_xray | chop#2 (wall) | 1.00 / -3.3% | 0.331 | 2.36 / -16.7% | 4.08 / -27.4% | 1.20 / -4.9% |
+//! | coronary_stenosis_xray | chop#3 (wall) | 1.73 / -9.1% | 0.356 | 3.81 / -22.0% | 7.25 / -42.2% | 4.46 / -24.0% |
+//! | coronary_stenosis_xray | stenosis 50% | 0.50 / -3.1% | 10.041 | 3.16 / -33.1% | 3.16 / -33.1% | 3.16 / -33.1% |
+//! | coronary_stenosis_xray | occlusion | 0.84 / -2.0% | 0.329 | 6.99 / -58.3% | 14.79 / -82.6% | 7.05 / -67.5% |
 //!
 //! Measured 2026-12-04 on src at b426dc2 (the old `axial` fill), 2 cores shared with another job
 //! (load 5.9 at the start, 4.7 at the end), from a clean venv (the bench installed the peers
