@@ -266,15 +266,7 @@ fn read_f64(path: &Path, mut m: HashMap<String, NpyArray>) -> Result<Msr> {
         } if shape == [s] => v,
         _ => return Err(bad(format!("member 'born' is not an int64 array of {s}"))),
     };
-    if let Some((k, &b)) = born
-        .iter()
-        .enumerate()
-        .find(|&(k, &b)| !(0..levels.max(1) as i64).contains(&b) || (k < inputs && b != 0))
-    {
-        return Err(bad(format!(
-            "member 'born': sample {k} at level {b} (input samples: 0; others: 0..{levels})"
-        )));
-    }
+    born_levels_valid(&born, levels, inputs).map_err(&bad)?;
     let origin = f64_array(take("phi_origin")?, "phi_origin", &[Some(3)]).map_err(&bad)?;
     let voxel = f64_array(take("phi_voxel")?, "phi_voxel", &[])
         .map_err(&bad)?
@@ -402,15 +394,7 @@ fn read_compact(path: &Path, mut m: HashMap<String, NpyArray>, max_bytes: u64) -
         .checked_sub(1)
         .ok_or_else(|| bad("member 'times' is empty".into()))?;
     check_params(&params, levels).map_err(|m| bad(format!("member 'params': {m}")))?;
-    if let Some((k, &b)) = born
-        .iter()
-        .enumerate()
-        .find(|&(k, &b)| !(0..levels.max(1) as i64).contains(&b) || (k < inputs && b != 0))
-    {
-        return Err(bad(format!(
-            "member 'born': sample {k} at level {b} (input samples: 0; others: 0..{levels})"
-        )));
-    }
+    born_levels_valid(&born, levels, inputs).map_err(&bad)?;
     let (_, added_at) =
         int_array(take("added_at")?, "added_at", &[Some(3), Some(s - inputs)]).map_err(&bad)?;
     let added_at = interleaved(&added_at, 3, 1);
@@ -618,5 +602,23 @@ fn f64_array(
                 want.join(", ")
             ))
         }
+    }
+}
+
+/// Every sample's birth level is a level of the archive, 0 for the input samples.
+fn born_levels_valid(
+    born: &[i64],
+    levels: usize,
+    inputs: usize,
+) -> std::result::Result<(), String> {
+    match born
+        .iter()
+        .enumerate()
+        .find(|&(k, &b)| !(0..levels.max(1) as i64).contains(&b) || (k < inputs && b != 0))
+    {
+        Some((k, b)) => Err(format!(
+            "member 'born': sample {k} at level {b} (input samples: 0; others: 0..{levels})"
+        )),
+        None => Ok(()),
     }
 }
