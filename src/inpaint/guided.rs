@@ -9,9 +9,10 @@
 //!    region: per branch, each maximal run of points inside the enlarged region E (the balls of D
 //!    grown by a clearance of a few voxels). The branch point before the run (and the one after
 //!    it) is an anchor, moved outward along the branch until its cross-section plane is clear of
-//!    D (the section is then intact wall; where none is before the branch ends, next to a
-//!    junction, the section is not read: the other anchor's is used, or a circle of the
-//!    narrowest radius walked over). An anchor has a position, the tangent pointing into
+//!    D (the section is then intact wall; where none is before the branch ends or the walk
+//!    reaches a junction's flare, its inscribed sphere grown by the vessel's radius, the section
+//!    is not read: the other anchor's is used, or a circle of the narrowest radius walked over;
+//!    a section ray that ends on another branch's wall is dropped). An anchor has a position, the tangent pointing into
 //!    D, and a cross-section: the wall's distance from the centreline point along rays in the
 //!    section plane ([`GuideOptions::rays`] angles), so non-circular vessels keep their shape.
 //! 2. **Curves.** A run with an anchor on both sides (the vessel passes through D) is bridged by
@@ -685,9 +686,7 @@ impl Sections<'_> {
                 .collect(),
         )
     }
-}
 
-impl Sections<'_> {
     /// The wall's offset from the tube's interpolated section, per sample and ray angle (step 3
     /// of the module docs): read where the ray from a sample (outside D on a tube towards a
     /// junction point) meets the input's wall
