@@ -391,6 +391,17 @@ fn plan_group(
         let pts = hermite(a, b, spacing);
         make_tube(&sections, pts, a, Some(b), EndCap::Open)
     };
+    // A branch continued from its anchor to the point `j` (a junction), capped there.
+    let to_point = |a: &Anchor, j: Point3<f64>| {
+        let end = Anchor {
+            point: j,
+            into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
+            radius: a.radius,
+            clear: false,
+            branch: None,
+        };
+        make_tube(&sections, hermite(a, &end, spacing), a, None, EndCap::Round)
+    };
     // A run through E joins its two anchors (a vessel crossing D, or clipped by it); the
     // anchors left over are the vessel's ends inside D, joined below.
     let mut single: Vec<usize> = Vec::new();
@@ -416,15 +427,7 @@ fn plan_group(
                 .min_by(|p, q| axis_distance(&a, p).total_cmp(&axis_distance(&a, q)))
                 .copied()
                 .expect("tubes have points");
-            let toward = Anchor {
-                point: j,
-                into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
-                radius: a.radius,
-                clear: false,
-                branch: None,
-            };
-            let pts = hermite(&a, &toward, spacing);
-            tubes.push(make_tube(&sections, pts, &a, None, EndCap::Round));
+            tubes.push(to_point(&a, j));
             kinds.push(GuideKind::Junction);
         }
         1 => {
@@ -468,15 +471,7 @@ fn plan_group(
                 })
                 .unwrap_or(centroid);
             for a in &anchors {
-                let toward = Anchor {
-                    point: j,
-                    into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
-                    radius: a.radius,
-                    clear: false,
-                    branch: None,
-                };
-                let pts = hermite(a, &toward, spacing);
-                tubes.push(make_tube(&sections, pts, a, None, EndCap::Round));
+                tubes.push(to_point(a, j));
                 kinds.push(GuideKind::Junction);
             }
         }
