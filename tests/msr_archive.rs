@@ -246,12 +246,7 @@ fn archive_round_trips_within_its_lattice_and_numpy_decodes_it() {
     }
     // φ_T within h/128 near the surface, half a far step beyond (the reach: the largest detail
     // plus 4h, over 63 codes).
-    let largest = msr
-        .details
-        .iter()
-        .flatten()
-        .map(|w| w.norm())
-        .fold(0.0, f64::max);
+    let largest = msr.largest_detail();
     let step = (0.25 * h).max((largest + 3.0 * h) / 63.0);
     let (mut near, mut far) = (0, 0);
     for (a, b) in back.phi.data().iter().zip(msr.phi.data()) {

@@ -56,6 +56,7 @@
 
 use super::mask::{blend_known, blend_weights, region_depth};
 use super::region::{depth_in, Ball};
+use super::stitch::submesh;
 use crate::grid::{Grid3, SubBox};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::redistance::{redistance, RedistanceOptions, RedistanceScheme};
@@ -350,20 +351,8 @@ fn interior_part(mesh: &TriMesh, grid: &Grid3, margin: f64) -> TriMesh {
     let [nx, ny, nz] = grid.dims();
     let hi = grid.world(nx - 1, ny - 1, nz - 1);
     let inside = |p: &Point3<f64>| (0..3).all(|a| p[a] >= lo[a] + margin && p[a] <= hi[a] - margin);
-    let mut index = vec![u32::MAX; mesh.num_vertices()];
-    let mut out = TriMesh::new(Vec::new(), Vec::new());
-    for f in &mesh.faces {
-        if !f.iter().all(|&v| inside(&mesh.vertices[v as usize])) {
-            continue;
-        }
-        let face = f.map(|v| {
-            if index[v as usize] == u32::MAX {
-                index[v as usize] = out.vertices.len() as u32;
-                out.vertices.push(mesh.vertices[v as usize]);
-            }
-            index[v as usize]
-        });
-        out.faces.push(face);
-    }
-    out
+    submesh(mesh, |f| {
+        f.iter().all(|&v| inside(&mesh.vertices[v as usize]))
+    })
+    .0
 }

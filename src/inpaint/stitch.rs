@@ -19,7 +19,7 @@ use std::collections::{HashMap, HashSet};
 
 /// The part of `mesh` made of the faces `keep` selects, its vertices renumbered compactly, and
 /// for each of its vertices the index it has in `mesh`.
-fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> (TriMesh, Vec<u32>) {
+pub(crate) fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> (TriMesh, Vec<u32>) {
     let mut map: HashMap<u32, u32> = HashMap::new();
     let mut out = TriMesh::default();
     let mut source = Vec::new();

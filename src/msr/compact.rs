@@ -168,12 +168,7 @@ pub fn encode_msr(msr: &Msr) -> CompactMsr {
             residuals.extend((0..3).map(|a| (w[a] - pred[a]) as i32));
         }
     }
-    let largest = msr
-        .details
-        .iter()
-        .flatten()
-        .map(|w| w.norm())
-        .fold(0.0, f64::max);
+    let largest = msr.largest_detail();
     let reach = (PHI_REACH_VOXELS * h).max(largest + 4.0 * h);
     let phi_far = (PHI_FAR_VOXELS * h).max((reach - h) / (127.0 - PHI_NEAR_STEPS));
     let phi = msr

@@ -135,6 +135,16 @@ impl Msr {
             .collect()
     }
 
+    /// The longest detail vector |W_i| over every level and sample (world units; 0 without
+    /// levels).
+    pub fn largest_detail(&self) -> f64 {
+        self.details
+            .iter()
+            .flatten()
+            .map(|w| w.norm())
+            .fold(0.0, f64::max)
+    }
+
     /// Whether sample `k` exists at level i − 1 (it was born there or before).
     fn exists_before(&self, k: usize, i: usize) -> bool {
         (self.born[k] as usize) < i
