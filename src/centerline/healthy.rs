@@ -3,17 +3,18 @@
 //! narrowings the centreline finds (regions D of their own), and the stenosis inside a region
 //! measured along the centreline, so that it does not depend on how large the region was drawn.
 //!
-//! The healthy diameter is the robust reference line of `stenosis` (least squares refitted on the
-//! points within −5%/+30% of the fit) of the branch nearest the point. Inside a ball D the
-//! narrowest measured input section along the centreline (against the healthy reference) gives
-//! the minimum diameter D_min; the diameter stenosis is 1 − D_min/D_ref and the area stenosis
-//! 1 − A_min/(π D_ref²/4), with D_ref the healthy reference there (fitted over the proximal and
-//! distal healthy segments, as NASCET takes the normal lumen beyond the lesion); the NASCET
-//! figure is that diameter stenosis. The output's section at the same point and direction is
-//! reported beside them (how much of the lumen the repair restored).
+//! The healthy diameters are the references of `stenosis` at the branch point nearest the point:
+//! the *local* one (the line between the widest lumen within reach on either side, read there)
+//! and the *normal* one (the narrower of those two shoulders). Inside a ball D the measured input
+//! section along the centreline narrowest against its local reference gives the minimum diameter
+//! D_min; the diameter stenosis is 1 − D_min/D_ref and the area stenosis 1 − A_min/(π D_ref²/4)
+//! with D_ref the local reference there (ECST's estimate of the original lumen), and the NASCET
+//! figure 1 − D_min/D_normal against the normal lumen beyond the lesion. The output's section at
+//! the same point and direction is reported beside them (how much of the lumen the repair
+//! restored).
 
 use super::profile::{measure_profiles, BranchProfile};
-use super::stenosis::{find_stenoses, BranchNarrowing, Lesion, StenosisFindOptions};
+use super::stenosis::{find_stenoses, BranchNarrowing, Lesion, Reference, StenosisFindOptions};
 use super::Centerline;
 use crate::inpaint::region::Ball;
 use crate::report::stenosis::cross_section;
@@ -39,10 +40,14 @@ pub struct RegionStenosis {
     pub min_input_diameter: f64,
     /// Equivalent diameter of the output at the same section, world units (None: no section).
     pub output_diameter: Option<f64>,
-    /// Healthy reference diameter there, world units.
+    /// Local healthy reference diameter there, world units.
     pub reference_diameter: f64,
     /// (1 − input / reference diameter) × 100.
     pub diameter_stenosis_pct: f64,
+    /// The normal lumen beyond the narrowing (the narrower shoulder), world units.
+    pub normal_diameter: f64,
+    /// (1 − input / normal diameter) × 100, as NASCET.
+    pub nascet_stenosis_pct: f64,
     /// (1 − input area / reference area) × 100.
     pub area_stenosis_pct: f64,
 }
@@ -74,32 +79,35 @@ impl HealthyVessel {
         best
     }
 
-    /// The healthy reference diameter of `branch` at its point `i` (None without a fit).
-    fn reference_at(&self, branch: usize, i: usize) -> Option<f64> {
-        let [a, b] = self
+    /// The healthy references of `branch` at its point `i`, or at its nearest measured point
+    /// along the branch where `i` has none (None when the branch has none).
+    fn reference_at(&self, branch: usize, i: usize) -> Option<Reference> {
+        let refs = &self
             .narrowing
             .iter()
             .find(|n| n.branch == branch)?
-            .reference_fit?;
-        let s = self
-            .profiles
-            .iter()
-            .find(|p| p.branch == branch)?
-            .points
-            .get(i)?
-            .s;
-        Some(a + b * s).filter(|d| *d > 0.0)
+            .reference;
+        let prof = self.profiles.iter().find(|p| p.branch == branch)?;
+        let s = prof.points.get(i)?.s;
+        refs.get(i).copied().flatten().or_else(|| {
+            refs.iter()
+                .zip(&prof.points)
+                .filter_map(|(r, p)| r.map(|r| (r, (p.s - s).abs())))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(r, _)| r)
+        })
     }
 
     /// The healthy vessel radius next to the surface point `p`: half the reference diameter at
     /// the nearest centreline point, when `p` lies within twice that radius of it.
     pub fn healthy_radius(&self, p: &Point3<f64>) -> Option<f64> {
         let (b, i, d) = self.nearest(p)?;
-        let r = 0.5 * self.reference_at(b, i)?;
+        let r = 0.5 * self.reference_at(b, i)?.local;
         (d <= 2.0 * r).then_some(r)
     }
 
-    /// One ball per lesion of at least `min_degree_pct`: on the centreline at the narrowest point,
+    /// One ball per lesion of at least `min_degree_pct` against the normal lumen beyond it
+    /// (NASCET; a dip before a widening is no lesion): on the centreline at the narrowest point,
     /// radius 1.5 healthy radii or the lesion's length (its width at half depth) plus one healthy
     /// radius, the larger: a bell-shaped narrowing is down to a sixteenth of its depth one
     /// half-depth width away from its narrowest point, so the ball reaches healthy wall on both
@@ -107,7 +115,7 @@ impl HealthyVessel {
     pub fn lesion_regions(&self, min_degree_pct: f64) -> Vec<Ball> {
         self.lesions
             .iter()
-            .filter(|l| l.diameter_stenosis_pct >= min_degree_pct)
+            .filter(|l| l.nascet_stenosis_pct >= min_degree_pct)
             .map(|l| {
                 let r = 0.5 * l.reference_diameter;
                 Ball {
@@ -122,7 +130,7 @@ impl HealthyVessel {
     /// centreline points inside the ball, the one where the input is narrowest against its
     /// healthy reference. None when no measured point lies in the ball.
     pub fn measure_in(&self, output: &TriMesh, ball: &Ball) -> Option<RegionStenosis> {
-        let mut best: Option<(f64, usize, usize, f64, f64)> = None;
+        let mut best: Option<(f64, usize, usize, f64, Reference)> = None;
         for prof in &self.profiles {
             let b = &self.centerline.branches[prof.branch];
             for (i, pp) in prof.points.iter().enumerate() {
@@ -135,7 +143,7 @@ impl HealthyVessel {
                 let Some(dref) = self.reference_at(prof.branch, i) else {
                     continue;
                 };
-                let ratio = d / dref;
+                let ratio = d / dref.local;
                 if best.is_none_or(|x| ratio < x.0) {
                     best = Some((ratio, prof.branch, i, d, dref));
                 }
@@ -151,10 +159,12 @@ impl HealthyVessel {
             position: [p.x, p.y, p.z],
             min_input_diameter: dmin,
             output_diameter: out.as_ref().map(|c| c.equivalent_diameter),
-            reference_diameter: dref,
-            diameter_stenosis_pct: (1.0 - dmin / dref) * 100.0,
-            area_stenosis_pct: (1.0 - area_in / (std::f64::consts::FRAC_PI_4 * dref * dref))
+            reference_diameter: dref.local,
+            diameter_stenosis_pct: (1.0 - dmin / dref.local) * 100.0,
+            area_stenosis_pct: (1.0 - area_in / (std::f64::consts::FRAC_PI_4 * dref.local.powi(2)))
                 * 100.0,
+            normal_diameter: dref.normal,
+            nascet_stenosis_pct: (1.0 - dmin / dref.normal) * 100.0,
         })
     }
 }

@@ -10,7 +10,7 @@
 //! - `refine`: smooth sub-voxel curves centred on the mesh's cross-sections, radius −φ;
 //! - `extract`: the whole pipeline from a mesh ([`compute_centerline`]);
 //! - `profile`: equivalent (cross-section area) and inscribed diameters along each branch;
-//! - `stenosis`: narrowings against a robust fit of the healthy diameter (NASCET-like).
+//! - `stenosis`: narrowings against the healthy lumen on either side (local and NASCET-like references).
 //!
 //! Lengths are in the mesh's own units throughout.
 

@@ -1,26 +1,43 @@
-//! Narrowings found automatically along each branch of a centreline, against a healthy reference
-//! diameter (as NASCET compares the narrowest lumen with the normal one).
+//! Narrowings found automatically along each branch of a centreline, against the healthy lumen
+//! on either side of them (as NASCET and ECST compare the narrowest lumen with the normal one).
 //!
 //! Per branch, on its equivalent-diameter profile (`profile`; points without a section are not
 //! used): the points within the branch's median radius of a closed or open end are left out
-//! (the wall turns there), the diameters are median-filtered over about one
-//! radius, and the healthy reference D_ref(s) = a + b·s is a robust straight-line fit: least
-//! squares, refitted on the points within −5%/+30% of the last fit (narrowings and dilations
-//! such as aneurysms leave the fit) until the kept set stops changing. A proximal and a distal
-//! healthy segment around a lesion thus set its reference, and a tapering vessel keeps its taper.
-//! The narrowing along the branch is 1 − D/D_ref; a lesion is a valley of it, deepest first (the
-//! run where it exceeds half the valley's peak, then on while it keeps falling away from it), reported with its position (the narrowest point), minimum and
-//! reference diameters, diameter stenosis (1 − D_min/D_ref) and area stenosis
-//! (1 − A_min/A_ref, A_ref = π D_ref²/4) in percent, and length (that run's arc length).
+//! (the wall turns there), and the diameters are median-filtered over about one radius. At each
+//! point the healthy lumen beyond it on each side (its *shoulder*) is the widest filtered
+//! diameter met going outward, up to where the diameter falls 3% below it again (the nearest
+//! healthy lumen, not a farther bulge) or [`SHOULDER_REACH`] median diameters of arc. A side whose reach runs past the
+//! measured points while the diameter is still rising towards them (a junction's unmeasured
+//! flare, a branch end next to the lesion) has no known shoulder; the other side's is used.
+//! Two references follow from the shoulders:
+//! - the *local* reference: the straight line between the two shoulders, read at the point —
+//!   the vessel's own diameter there had it not narrowed (ECST's estimate of the original
+//!   lumen), which keeps a tapering vessel's taper; the diameter stenosis is against it;
+//! - the *normal* reference: the narrower shoulder. NASCET takes the normal lumen distal to the
+//!   lesion, the narrower one in an artery that tapers downstream (which way the blood flows is
+//!   not in a mesh); a dip before a widening (a bulb, a junction's flare, a taper) is not a
+//!   narrowing against it, so lesions are found against this one.
+//!
+//! A lesion is a valley of the narrowing against the normal reference at least
+//! [`StenosisFindOptions::min_degree_pct`] deep, deepest first (the points between its two
+//! shoulders are then taken), reported with its position (the narrowest point), minimum and
+//! local reference diameters, diameter stenosis (1 − D_min/D_ref) and area stenosis
+//! (1 − A_min/A_ref, A_ref = π D_ref²/4) in percent, the NASCET-style degree against the normal
+//! reference, and length (the arc length over which it is narrower than the local reference
+//! line by more than half its depth).
 
 use super::profile::BranchProfile;
 use super::{Centerline, EndKind};
 use serde::Serialize;
 
+/// Each side's shoulder is looked for within this many of the branch's median diameters of arc.
+pub const SHOULDER_REACH: f64 = 4.0;
+
 /// Options of [`find_stenoses`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StenosisFindOptions {
-    /// Smallest diameter stenosis reported as a lesion, percent (default 10).
+    /// Smallest NASCET-style stenosis (against the narrower shoulder) reported as a lesion,
+    /// percent (default 10).
     pub min_degree_pct: f64,
 }
 
@@ -42,16 +59,29 @@ pub struct Lesion {
     pub s: f64,
     /// Equivalent diameter there, world units.
     pub min_diameter: f64,
-    /// Healthy reference diameter there, world units.
+    /// Local healthy reference diameter there (the line between the shoulders), world units.
     pub reference_diameter: f64,
     /// (1 − min / reference) × 100.
     pub diameter_stenosis_pct: f64,
     /// (1 − area / reference area) × 100.
     pub area_stenosis_pct: f64,
+    /// The normal lumen beyond the lesion (the narrower shoulder), world units.
+    pub normal_diameter: f64,
+    /// (1 − min / normal) × 100, as NASCET.
+    pub nascet_stenosis_pct: f64,
     /// Arc length over which the narrowing exceeds half its largest value, world units.
     pub length: f64,
     /// Inscribed radius at the narrowest point, world units.
     pub inscribed_radius: f64,
+}
+
+/// The healthy references at one profile point (see the module doc), world units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Reference {
+    /// The line between the shoulders read at the point.
+    pub local: f64,
+    /// The narrower shoulder.
+    pub normal: f64,
 }
 
 /// The narrowing figures of one branch.
@@ -60,10 +90,114 @@ pub struct BranchNarrowing {
     pub branch: usize,
     /// Points measured (with a section, away from the ends).
     pub measured: usize,
-    /// Reference diameter fit: D_ref(s) = intercept + slope·s (None with too few points).
-    pub reference_fit: Option<[f64; 2]>,
-    /// Largest (1 − D/D_ref) × 100 over the branch (0 when none narrower than the reference).
+    /// The references at every profile point (None where it is not measured or no shoulder is
+    /// known).
+    #[serde(skip)]
+    pub reference: Vec<Option<Reference>>,
+    /// Largest (1 − D/D_normal) × 100 over the branch (0 when none narrower than its normal
+    /// reference).
     pub max_narrowing_pct: f64,
+}
+
+/// The filtered profile of one branch: measured point indices, arc lengths, diameters.
+struct Filtered {
+    idx: Vec<usize>,
+    s: Vec<f64>,
+    d: Vec<f64>,
+}
+
+/// Shoulders of point `k` of (s, d): on each side, the widest point met going outward before
+/// the diameter falls 3% below it again or `reach` of arc is passed (the nearest of equal ones), None for a side cut short by the measured points while
+/// the diameter still rises towards their edge (both kept when both are so: the best there is).
+fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Option<usize>) {
+    let side = |range: &mut dyn Iterator<Item = usize>, edge: usize| -> (usize, bool) {
+        let mut best = k;
+        for j in range {
+            // Past the reach, or past the shoulder: fallen 3% below the widest so far (the
+            // nearest healthy lumen, not a farther bulge of the vessel's natural variation).
+            if (s[j] - s[k]).abs() > reach || (best != k && d[j] < 0.97 * d[best]) {
+                return (best, true);
+            }
+            if d[j] > d[best] {
+                best = j;
+            }
+        }
+        // Cut short by the edge: unknown when the widest lies within a quarter of the reach of
+        // the edge and the diameter still rises into the edge (by 3% over the last radius).
+        let near_edge = |j: usize| (s[j] - s[edge]).abs() <= 0.25 * reach;
+        let inner = (0..s.len())
+            .filter(|&j| (s[j] - s[edge]).abs() <= reach / (2.0 * SHOULDER_REACH))
+            .max_by(|&a, &b| (s[a] - s[edge]).abs().total_cmp(&(s[b] - s[edge]).abs()))
+            .unwrap_or(edge);
+        (
+            best,
+            best == k || !near_edge(best) || d[edge] <= 1.03 * d[inner],
+        )
+    };
+    let (left, lk) = side(&mut (0..k).rev(), 0);
+    let (right, rk) = side(&mut (k + 1..s.len()), s.len() - 1);
+    if !lk && !rk {
+        return (Some(left), Some(right));
+    }
+    (lk.then_some(left), rk.then_some(right))
+}
+
+/// The references at point `k` of (s, d) from its shoulders (None when neither side has one).
+fn reference_at(s: &[f64], d: &[f64], k: usize, reach: f64) -> Option<Reference> {
+    match shoulders(s, d, k, reach) {
+        (Some(l), Some(r)) => {
+            let local = if s[r] > s[l] {
+                d[l] + (d[r] - d[l]) * (s[k] - s[l]) / (s[r] - s[l])
+            } else {
+                d[k]
+            };
+            Some(Reference {
+                local,
+                normal: d[l].min(d[r]),
+            })
+        }
+        (Some(j), None) | (None, Some(j)) => Some(Reference {
+            local: d[j],
+            normal: d[j],
+        }),
+        (None, None) => None,
+    }
+}
+
+/// The measured points of a branch's profile, away from its closed and open ends (by the
+/// branch's median radius), with their diameters median-filtered over about one radius; None
+/// with fewer than 5.
+fn filtered_profile(centerline: &Centerline, prof: &BranchProfile) -> Option<Filtered> {
+    let b = &centerline.branches[prof.branch];
+    let total = prof.points.last().map_or(0.0, |p| p.s);
+    let median_radius = median(b.radius.clone());
+    let idx: Vec<usize> = (0..prof.points.len())
+        .filter(|&i| {
+            let p = &prof.points[i];
+            let near = |kind: EndKind, d: f64| kind != EndKind::Junction && d < median_radius;
+            p.equivalent_diameter.is_some() && !near(b.start, p.s) && !near(b.end, total - p.s)
+        })
+        .collect();
+    if idx.len() < 5 {
+        return None;
+    }
+    let s: Vec<f64> = idx.iter().map(|&i| prof.points[i].s).collect();
+    let raw: Vec<f64> = idx
+        .iter()
+        .map(|&i| prof.points[i].equivalent_diameter.unwrap_or(0.0))
+        .collect();
+    let spacing = (s[s.len() - 1] - s[0]) / (s.len() - 1).max(1) as f64;
+    let median_r = 0.5 * median(raw.clone());
+    let half = ((0.5 * median_r / spacing.max(1e-300)).round() as usize).min(10);
+    let d = (0..raw.len())
+        .map(|k| median(raw[k.saturating_sub(half)..(k + half + 1).min(raw.len())].to_vec()))
+        .collect();
+    Some(Filtered { idx, s, d })
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 /// Lesions of every branch (sorted by degree, largest first) and each branch's figures.
@@ -75,76 +209,39 @@ pub fn find_stenoses(
     let mut lesions = Vec::new();
     let mut figures = Vec::new();
     for prof in profiles {
-        let b = &centerline.branches[prof.branch];
-        let n = prof.points.len();
-        let total = prof.points.last().map_or(0.0, |p| p.s);
-        // Points away from the closed and open ends (by the branch's median radius), with a
-        // section.
-        let median_radius = {
-            let mut r = b.radius.clone();
-            r.sort_by(f64::total_cmp);
-            r.get(r.len() / 2).copied().unwrap_or(0.0)
-        };
-        let idx: Vec<usize> = (0..n)
-            .filter(|&i| {
-                let p = &prof.points[i];
-                let near = |kind: EndKind, d: f64| kind != EndKind::Junction && d < median_radius;
-                p.equivalent_diameter.is_some() && !near(b.start, p.s) && !near(b.end, total - p.s)
-            })
-            .collect();
         let mut fig = BranchNarrowing {
             branch: prof.branch,
-            measured: idx.len(),
-            reference_fit: None,
+            measured: 0,
+            reference: vec![None; prof.points.len()],
             max_narrowing_pct: 0.0,
         };
-        if idx.len() < 5 {
+        let Some(Filtered { idx, s, d }) = filtered_profile(centerline, prof) else {
+            fig.measured = prof
+                .points
+                .iter()
+                .filter(|p| p.equivalent_diameter.is_some())
+                .count();
             figures.push(fig);
             continue;
+        };
+        fig.measured = idx.len();
+        let reach = SHOULDER_REACH * median(d.clone());
+        let refs: Vec<Option<Reference>> = (0..d.len())
+            .map(|k| reference_at(&s, &d, k, reach))
+            .collect();
+        for (k, r) in refs.iter().enumerate() {
+            fig.reference[idx[k]] = *r;
         }
-        let s: Vec<f64> = idx.iter().map(|&i| prof.points[i].s).collect();
-        let raw: Vec<f64> = idx
-            .iter()
-            .map(|&i| prof.points[i].equivalent_diameter.unwrap_or(0.0))
-            .collect();
-        // Median filter over about one radius of arc.
-        let spacing = (s[s.len() - 1] - s[0]) / (s.len() - 1).max(1) as f64;
-        let median_r = {
-            let mut r: Vec<f64> = raw.iter().map(|d| 0.5 * d).collect();
-            r.sort_by(f64::total_cmp);
-            r[r.len() / 2]
-        };
-        let half = ((0.5 * median_r / spacing.max(1e-300)).round() as usize).min(10);
-        let d: Vec<f64> = (0..raw.len())
-            .map(|k| {
-                let lo = k.saturating_sub(half);
-                let hi = (k + half + 1).min(raw.len());
-                let mut w: Vec<f64> = raw[lo..hi].to_vec();
-                w.sort_by(f64::total_cmp);
-                w[w.len() / 2]
-            })
-            .collect();
-        let Some([a, slope]) = robust_line(&s, &d) else {
-            figures.push(fig);
-            continue;
-        };
-        fig.reference_fit = Some([a, slope]);
-        let narrowing: Vec<f64> = s
+        // Narrowing against the normal reference (the narrower shoulder).
+        let narrowing: Vec<f64> = refs
             .iter()
             .zip(&d)
-            .map(|(&si, &di)| {
-                let r = a + slope * si;
-                if r > 0.0 {
-                    1.0 - di / r
-                } else {
-                    0.0
-                }
-            })
+            .map(|(r, &di)| r.map_or(0.0, |r| (1.0 - di / r.normal).max(0.0)))
             .collect();
         fig.max_narrowing_pct = narrowing.iter().cloned().fold(0.0, f64::max) * 100.0;
         figures.push(fig);
 
-        // Lesions: runs above half their own peak, from the deepest down.
+        // Lesions, from the deepest down: the points between a lesion's shoulders are its own.
         let mut used = vec![false; narrowing.len()];
         while let Some((k, &peak)) = narrowing
             .iter()
@@ -152,121 +249,121 @@ pub fn find_stenoses(
             .filter(|(k, _)| !used[*k])
             .max_by(|a, b| a.1.total_cmp(b.1))
         {
-            if peak * 100.0 < opts.min_degree_pct {
+            if peak * 100.0 < opts.min_degree_pct || peak <= 0.0 {
                 break;
             }
-            let mut lo = k;
-            while lo > 0 && narrowing[lo - 1] > 0.5 * peak && !used[lo - 1] {
-                lo -= 1;
-            }
-            let mut hi = k;
-            while hi + 1 < narrowing.len() && narrowing[hi + 1] > 0.5 * peak && !used[hi + 1] {
-                hi += 1;
-            }
-            // The whole valley is this lesion's: on from the half-peak run while the narrowing
-            // keeps falling away from the peak.
-            let (mut vlo, mut vhi) = (lo, hi);
-            while vlo > 0 && !used[vlo - 1] && narrowing[vlo - 1] <= narrowing[vlo] {
-                vlo -= 1;
-            }
-            while vhi + 1 < narrowing.len()
-                && !used[vhi + 1]
-                && narrowing[vhi + 1] <= narrowing[vhi]
-            {
-                vhi += 1;
-            }
-            for u in used.iter_mut().take(vhi + 1).skip(vlo) {
+            let Some(r) = refs[k] else { break };
+            let (l, h) = shoulders(&s, &d, k, reach);
+            let (lo, hi) = (l.unwrap_or(0), h.unwrap_or(d.len() - 1));
+            for u in used.iter_mut().take(hi + 1).skip(lo) {
                 *u = true;
             }
-            let i = idx[k];
-            let p = &prof.points[i];
-            let dref = a + slope * s[k];
+            // The width at half depth, against this lesion's local reference line.
+            let line = |j: usize| match (l, h) {
+                (Some(l), Some(h)) if s[h] > s[l] => {
+                    d[l] + (d[h] - d[l]) * (s[j] - s[l]) / (s[h] - s[l])
+                }
+                _ => r.local,
+            };
+            let depth = 1.0 - d[k] / r.local;
+            let deep = |j: usize| 1.0 - d[j] / line(j) > 0.5 * depth;
+            let mut a = k;
+            while a > lo && deep(a - 1) {
+                a -= 1;
+            }
+            let mut b = k;
+            while b < hi && deep(b + 1) {
+                b += 1;
+            }
+            let p = &prof.points[idx[k]];
             let dmin = d[k];
             lesions.push(Lesion {
                 branch: prof.branch,
                 position: p.position,
                 s: p.s,
                 min_diameter: dmin,
-                reference_diameter: dref,
-                diameter_stenosis_pct: (1.0 - dmin / dref) * 100.0,
-                area_stenosis_pct: (1.0 - (dmin / dref).powi(2)) * 100.0,
-                length: s[hi] - s[lo],
+                reference_diameter: r.local,
+                diameter_stenosis_pct: (1.0 - dmin / r.local) * 100.0,
+                area_stenosis_pct: (1.0 - (dmin / r.local).powi(2)) * 100.0,
+                normal_diameter: r.normal,
+                nascet_stenosis_pct: (1.0 - dmin / r.normal) * 100.0,
+                length: s[b] - s[a],
                 inscribed_radius: 0.5 * p.inscribed_diameter,
             });
         }
     }
-    lesions.sort_by(|a, b| b.diameter_stenosis_pct.total_cmp(&a.diameter_stenosis_pct));
+    lesions.sort_by(|a, b| b.nascet_stenosis_pct.total_cmp(&a.nascet_stenosis_pct));
     (lesions, figures)
-}
-
-/// Least-squares line through (x, y), refitted on the points within −5% / +30% of the last fit
-/// until the kept set stops changing (at most 20 rounds); None with fewer than 3 points kept or
-/// all x equal.
-pub fn robust_line(x: &[f64], y: &[f64]) -> Option<[f64; 2]> {
-    let mut keep = vec![true; x.len()];
-    let mut fit = None;
-    for _ in 0..20 {
-        let f = line_fit(x, y, &keep)?;
-        let next: Vec<bool> = x
-            .iter()
-            .zip(y)
-            .map(|(&xi, &yi)| {
-                let r = f[0] + f[1] * xi;
-                yi >= 0.95 * r && yi <= 1.3 * r
-            })
-            .collect();
-        fit = Some(f);
-        if next == keep || next.iter().filter(|&&k| k).count() < 3 {
-            break;
-        }
-        keep = next;
-    }
-    fit
-}
-
-fn line_fit(x: &[f64], y: &[f64], keep: &[bool]) -> Option<[f64; 2]> {
-    let (mut n, mut sx, mut sy, mut sxx, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for ((&xi, &yi), &k) in x.iter().zip(y).zip(keep) {
-        if k {
-            n += 1.0;
-            sx += xi;
-            sy += yi;
-            sxx += xi * xi;
-            sxy += xi * yi;
-        }
-    }
-    if n < 3.0 {
-        return None;
-    }
-    let det = n * sxx - sx * sx;
-    if det.abs() <= 1e-12 * (n * sxx).abs().max(1e-300) {
-        return Some([sy / n, 0.0]);
-    }
-    let slope = (n * sxy - sx * sy) / det;
-    Some([(sy - slope * sx) / n, slope])
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[test]
-    fn robust_line_ignores_a_narrowing_and_a_dilation() {
-        let x: Vec<f64> = (0..100).map(|i| i as f64).collect();
-        let y: Vec<f64> = x
+    /// A tapering profile with a 50% narrowing, a dilation and a step down (a bulb's end).
+    fn profile(step: bool) -> (Vec<f64>, Vec<f64>) {
+        let s: Vec<f64> = (0..200).map(|i| i as f64 * 0.5).collect();
+        let d = s
             .iter()
-            .map(|&s| {
-                let healthy = 6.0 - 0.01 * s;
-                if (40.0..50.0).contains(&s) {
-                    healthy * 0.5
-                } else if (70.0..75.0).contains(&s) {
-                    healthy * 1.8
-                } else {
-                    healthy
-                }
+            .map(|&x| {
+                let healthy = 6.0 - 0.02 * x + if step && x > 60.0 { 3.0 } else { 0.0 };
+                let narrow = 1.0 - 0.5 * (-(x - 30.0).powi(2) / (2.0 * 9.0)).exp();
+                let wide = 1.0 + 0.8 * (-(x - 80.0).powi(2) / 8.0).exp();
+                healthy * narrow * wide
             })
             .collect();
-        let [a, b] = robust_line(&x, &y).unwrap();
-        assert!((a - 6.0).abs() < 1e-9 && (b + 0.01).abs() < 1e-9, "{a} {b}");
+        (s, d)
+    }
+
+    #[test]
+    fn shoulders_give_the_local_and_normal_references() {
+        let (s, d) = profile(false);
+        let r = reference_at(&s, &d, 60, 24.0).unwrap();
+        let healthy = 6.0 - 0.02 * 30.0;
+        assert!(
+            (r.local - healthy).abs() < 0.02 * healthy,
+            "{r:?} {healthy}"
+        );
+        assert!(r.normal < r.local && r.normal > 0.93 * healthy, "{r:?}");
+        assert!((d[60] / r.local - 0.5).abs() < 0.02);
+        // A healthy point is its own reference on a taper.
+        let r = reference_at(&s, &d, 190, 24.0).unwrap();
+        assert!((1.0 - d[190] / r.normal).abs() < 0.01, "{r:?} {}", d[190]);
+    }
+
+    #[test]
+    fn a_dip_before_a_widening_is_no_narrowing_against_the_normal_lumen() {
+        // Flat at 6, a 5% dip, then up to 9: against the line between the shoulders the dip
+        // looks like 30%; against the narrower shoulder it is 5%.
+        let s: Vec<f64> = (0..120).map(|i| i as f64 * 0.5).collect();
+        let d: Vec<f64> = s
+            .iter()
+            .map(|&x| {
+                let base = if x < 30.0 {
+                    6.0
+                } else {
+                    6.0 + 3.0 * ((x - 30.0) / 10.0).min(1.0)
+                };
+                base * (1.0 - 0.05 * (-(x - 28.0).powi(2) / 4.0).exp())
+            })
+            .collect();
+        let k = 56;
+        let r = reference_at(&s, &d, k, 24.0).unwrap();
+        assert!((1.0 - d[k] / r.normal) < 0.06, "{r:?} {}", d[k]);
+        assert!((1.0 - d[k] / r.local) > 0.15, "{r:?} {}", d[k]);
+    }
+
+    #[test]
+    fn a_side_cut_short_while_rising_is_unknown() {
+        // The profile starts inside a narrowing (a junction's unmeasured flare beyond): the left
+        // side rises into its edge, so only the right shoulder is known.
+        let (s, d) = profile(false);
+        let (s, d) = (s[50..].to_vec(), d[50..].to_vec());
+        let k = 10; // x = 30
+        let (l, r) = shoulders(&s, &d, k, 24.0);
+        assert_eq!(l, None);
+        assert!(r.is_some());
+        let rf = reference_at(&s, &d, k, 24.0).unwrap();
+        assert!((d[k] / rf.local - 0.5).abs() < 0.05, "{rf:?}");
     }
 }

@@ -30,6 +30,9 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// The source of a region from `--stenoses` (the report's `source`).
+const DETECTED_STENOSIS: &str = "detected stenosis";
+
 #[derive(Debug, clap::Args)]
 pub struct RepairArgs {
     /// Input mesh (.stl, .obj, .ply, .vtp or .vtk), in any length unit (mm, cm, m): every length
@@ -52,8 +55,8 @@ pub struct RepairArgs {
     /// the vessel) becomes a region.
     #[arg(long)]
     pub holes: bool,
-    /// Also repair every narrowing the centreline finds of at least P% diameter stenosis
-    /// (default 20): a ball on the centreline at the narrowest point, 1.5 healthy radii or the
+    /// Also repair every narrowing the centreline finds of at least P% stenosis against the
+    /// normal lumen beyond it (NASCET; default 20): a ball on the centreline at the narrowest point, 1.5 healthy radii or the
     /// lesion's width at half depth plus one healthy radius, the larger.
     #[arg(long, value_name = "P", num_args = 0..=1, default_missing_value = "20")]
     pub stenoses: Option<f64>,
@@ -265,7 +268,7 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
         }
         for b in found {
             balls.push(b);
-            sources.push("detected stenosis".into());
+            sources.push(DETECTED_STENOSIS.into());
         }
     }
     let mut loops = Vec::new();
@@ -326,6 +329,7 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
         max_iterations: args
             .max_iterations
             .unwrap_or(RepairOptions::default().max_iterations),
+        intact_lumen: sources.iter().map(|s| s == DETECTED_STENOSIS).collect(),
         ..RepairOptions::default()
     };
     repair_budget::check(&mesh, &balls, &opts, ctx.max_memory)

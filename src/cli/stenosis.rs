@@ -1,6 +1,6 @@
 //! `vesselmsr stenosis MESH [--centerline CL.json] [--min-degree P] [--json]`: narrowings found
-//! automatically along every branch of the centreline, against a robust fit of the healthy
-//! diameter (see `centerline::stenosis`).
+//! automatically along every branch of the centreline, against the healthy lumen on either side
+//! of each (see `centerline::stenosis`).
 
 use super::centerline::{centerline_for, CenterlineSource};
 use super::{print_json, progress, Context};
@@ -69,7 +69,7 @@ pub fn run(ctx: &Context, args: &StenosisArgs) -> anyhow::Result<()> {
     }
     for l in lesions {
         println!(
-            "branch {} at ({:.4}, {:.4}, {:.4}), s = {:.4}: diameter {:.4} against {:.4} healthy: {:.1}% diameter, {:.1}% area stenosis, length {:.4}",
+            "branch {} at ({:.4}, {:.4}, {:.4}), s = {:.4}: diameter {:.4} against {:.4} healthy: {:.1}% diameter, {:.1}% area stenosis, {:.1}% NASCET (normal lumen {:.4}), length {:.4}",
             l.branch,
             l.position[0],
             l.position[1],
@@ -79,6 +79,8 @@ pub fn run(ctx: &Context, args: &StenosisArgs) -> anyhow::Result<()> {
             l.reference_diameter,
             l.diameter_stenosis_pct,
             l.area_stenosis_pct,
+            l.nascet_stenosis_pct,
+            l.normal_diameter,
             l.length
         );
     }

@@ -17,7 +17,10 @@
 //!    section plane ([`GuideOptions::rays`] angles), so non-circular vessels keep their shape.
 //! 2. **Curves.** A run with an anchor on both sides (the vessel passes through D) is bridged by
 //!    the cubic Hermite curve matching both anchors' positions and tangents (tangent length: the
-//!    chord scaled so that a circular bend is followed, within 0.03% of its radius at 90°). Runs that end inside D (a gap: the vessel cut in two; a junction in D) give
+//!    chord scaled so that a circular bend is followed, within 0.03% of its radius at 90°; where
+//!    D holds an intact, only narrowed lumen and the input's centreline strays from that cubic by
+//!    more than half a radius — a vessel winding through a long region — the centreline itself,
+//!    smoothed, is followed instead). Runs that end inside D (a gap: the vessel cut in two; a junction in D) give
 //!    one-sided anchors: two are bridged the same way; three or more (a bifurcation) are each
 //!    continued to the junction point (the centreline's junction inside E, else the point nearest
 //!    to all anchor axes in least squares), end there in a round cap and are joined by a smooth
@@ -152,6 +155,8 @@ struct Anchor {
     clear: bool,
     /// The centreline branch it lies on (none for a curve's inner end).
     branch: Option<usize>,
+    /// Its point's index on that branch.
+    index: usize,
 }
 
 /// Groups of overlapping balls (indices), in order of their first ball.
@@ -187,18 +192,24 @@ fn ball_groups(balls: &[Ball]) -> Vec<Vec<usize>> {
 
 /// The guides of the balls: one per group of overlapping balls through which the centreline
 /// gives a vessel (see the module docs); groups without are left out. `mesh_bvh` is the BVH of
-/// the closed damaged input (the sections are read on it), `h` the voxel.
+/// the closed damaged input (the sections are read on it), `h` the voxel; `intact[i]`: ball i's
+/// lumen is only narrowed, its centreline the vessel's (a group of such balls may follow it,
+/// [`follow_or_bridge`]; missing entries are false).
 pub fn plan_guides(
     mesh_bvh: &MeshBvh,
     centerline: &Centerline,
     balls: &[Ball],
+    intact: &[bool],
     h: f64,
     opts: &GuideOptions,
 ) -> Vec<RegionGuide> {
     let mut out = Vec::new();
     for group in ball_groups(balls) {
         let gb: Vec<Ball> = group.iter().map(|&i| balls[i]).collect();
-        if let Some((tubes, kinds)) = plan_group(mesh_bvh, centerline, &gb, h, opts) {
+        let follow = group
+            .iter()
+            .all(|&i| intact.get(i).copied().unwrap_or(false));
+        if let Some((tubes, kinds)) = plan_group(mesh_bvh, centerline, &gb, follow, h, opts) {
             let fillet = 0.25
                 * tubes
                     .iter()
@@ -219,6 +230,7 @@ fn plan_group(
     bvh: &MeshBvh,
     centerline: &Centerline,
     balls: &[Ball],
+    follow: bool,
     h: f64,
     opts: &GuideOptions,
 ) -> Option<(Vec<GuideTube>, Vec<GuideKind>)> {
@@ -299,6 +311,7 @@ fn plan_group(
                             radius: if is_clear { br.radius[ku] } else { thinnest },
                             clear: is_clear,
                             branch: Some(bi),
+                            index: ku,
                         };
                     }
                     k = next;
@@ -388,7 +401,11 @@ fn plan_group(
         grow,
     };
     let bridge = |a: &Anchor, b: &Anchor| {
-        let pts = hermite(a, b, spacing);
+        let pts = if follow {
+            follow_or_bridge(centerline, a, b, spacing)
+        } else {
+            hermite(a, b, spacing)
+        };
         make_tube(&sections, pts, a, Some(b), EndCap::Open)
     };
     // A branch continued from its anchor to the point `j` (a junction), capped there.
@@ -399,6 +416,7 @@ fn plan_group(
             radius: a.radius,
             clear: false,
             branch: None,
+            index: 0,
         };
         make_tube(&sections, hermite(a, &end, spacing), a, None, EndCap::Round)
     };
@@ -523,6 +541,63 @@ fn hermite(a: &Anchor, b: &Anchor, spacing: f64) -> Vec<Point3<f64>> {
     let pts: Vec<Point3<f64>> = (0..=dense).map(|k| at(k as f64 / dense as f64)).collect();
     resample(&pts, spacing)
 }
+
+/// The curve between two anchors of one run through E where the lumen in D is intact (a
+/// narrowing): the cubic Hermite curve, unless the vessel bends inside D more than one cubic
+/// can follow — the input's own centreline between
+/// the anchors strays from it by more than [`FOLLOW_RADII`] of the anchors' radius (a long region
+/// along a winding vessel, several narrowings merged) — in which case that centreline is
+/// followed, smoothed over about one radius of arc (its ends, the anchors, kept).
+fn follow_or_bridge(
+    centerline: &Centerline,
+    a: &Anchor,
+    b: &Anchor,
+    spacing: f64,
+) -> Vec<Point3<f64>> {
+    let curve = hermite(a, b, spacing);
+    let (Some(ba), Some(bb)) = (a.branch, b.branch) else {
+        return curve;
+    };
+    let Some(br) = centerline.branches.get(ba).filter(|_| ba == bb) else {
+        return curve;
+    };
+    let (lo, hi) = (a.index.min(b.index), a.index.max(b.index));
+    if hi >= br.points.len() || hi - lo < 2 {
+        return curve;
+    }
+    let mut path: Vec<Point3<f64>> = br.points[lo..=hi].to_vec();
+    if a.index > b.index {
+        path.reverse();
+    }
+    let r = a.radius.min(b.radius).max(spacing);
+    let strays = path.iter().any(|p| {
+        curve
+            .iter()
+            .map(|c| (c - p).norm_squared())
+            .fold(f64::INFINITY, f64::min)
+            > (FOLLOW_RADII * r).powi(2)
+    });
+    if !strays {
+        return curve;
+    }
+    let dense = resample(&path, 0.25 * r);
+    let half = 4usize; // ±one radius of arc at a quarter-radius spacing
+    let n = dense.len();
+    let smooth: Vec<Point3<f64>> = (0..n)
+        .map(|k| {
+            let w = half.min(k).min(n - 1 - k);
+            let sum = dense[k - w..=k + w]
+                .iter()
+                .fold(Vector3::zeros(), |acc, p| acc + p.coords);
+            Point3::from(sum / (2 * w + 1) as f64)
+        })
+        .collect();
+    resample(&smooth, spacing)
+}
+
+/// The input's centreline is followed across D where a Hermite bridge strays from it by more
+/// than this many anchor radii (see [`follow_or_bridge`]).
+const FOLLOW_RADII: f64 = 0.5;
 
 /// The polyline resampled about `spacing` apart by arc length (ends kept).
 fn resample(pts: &[Point3<f64>], spacing: f64) -> Vec<Point3<f64>> {
@@ -958,6 +1033,7 @@ mod tests {
             radius: 1.0,
             clear: true,
             branch: None,
+            index: 0,
         };
         let b = Anchor {
             point: Point3::new(0.0, 10.0, 0.0),
@@ -965,6 +1041,7 @@ mod tests {
             radius: 1.0,
             clear: true,
             branch: None,
+            index: 0,
         };
         let pts = hermite(&a, &b, 0.1);
         let worst = pts

@@ -143,6 +143,11 @@ pub struct RepairOptions {
     /// Width of the band inside ∂D over which the fill is blended into φ_0, **in voxels**
     /// (default 2).
     pub blend_voxels: f64,
+    /// Per region (in the order of the balls): its lumen is intact, only narrowed (a narrowing
+    /// found along the centreline), so the input's centreline through it is the vessel's own
+    /// and the `centerline` fill may follow it where it winds; missing entries: not intact
+    /// (a hole's or a chop's centreline runs through a cap or a gap). Default empty.
+    pub intact_lumen: Vec<bool>,
 }
 
 impl Default for RepairOptions {
@@ -160,6 +165,7 @@ impl Default for RepairOptions {
             max_iterations: 12,
             tolerance_voxels: 0.1,
             blend_voxels: 2.0,
+            intact_lumen: Vec::new(),
         }
     }
 }
@@ -410,7 +416,14 @@ pub fn repair_with_centerline(
             };
             let bvh = MeshBvh::new(&closed_input);
             let plans = centerline.map_or_else(Vec::new, |c| {
-                plan_guides(&bvh, c, balls, h, &GuideOptions::default())
+                plan_guides(
+                    &bvh,
+                    c,
+                    balls,
+                    &opts.intact_lumen,
+                    h,
+                    &GuideOptions::default(),
+                )
             });
             let mut guided_ball = vec![false; balls.len()];
             for g in &plans {

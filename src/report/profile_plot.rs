@@ -1,6 +1,6 @@
 //! The diameter profile picture: one panel per centreline branch, the equivalent diameter
-//! (cross-section area) and the inscribed diameter against the arc length, the healthy reference
-//! line of the narrowing search dashed, and each lesion marked with its degree. Drawn with
+//! (cross-section area) and the inscribed diameter against the arc length, the local healthy
+//! reference of the narrowing search dashed, and each lesion marked with its degree. Drawn with
 //! `plotters` on its bitmap backend, as the histograms are.
 
 use super::image::RgbImage;
@@ -101,14 +101,21 @@ pub fn profile_picture(
                 .legend(|(x, y)| {
                     PathElement::new([(x, y), (x + 16, y)], INSCRIBED.stroke_width(1))
                 });
-            if let Some([a, b]) = narrowing
+            let reference: Vec<(f64, f64)> = narrowing
                 .iter()
                 .find(|n| n.branch == prof.branch)
-                .and_then(|n| n.reference_fit)
-            {
+                .map(|n| {
+                    n.reference
+                        .iter()
+                        .zip(&prof.points)
+                        .filter_map(|(r, p)| r.map(|r| (p.s, r.local)))
+                        .collect()
+                })
+                .unwrap_or_default();
+            if !reference.is_empty() {
                 chart
                     .draw_series(DashedLineSeries::new(
-                        [(0.0, a), (s_max, a + b * s_max)],
+                        reference,
                         6,
                         4,
                         REFERENCE.stroke_width(1),

@@ -33,18 +33,20 @@ pub struct RegionReport {
     pub input_volume_in_region: f64,
     /// Volume of the output inside D, world units³.
     pub output_volume_in_region: f64,
-    /// (1 − min input diameter / healthy diameter) × 100 ("centerline": the healthy reference
-    /// of the input's centreline at the narrowest point; "sections": the output's diameter at
-    /// the input's narrowest section in D); None when no cross-section could be taken in D.
+    /// (1 − min input diameter / healthy diameter) × 100 ("centerline": the local healthy
+    /// reference of the input's centreline at the narrowest point, the line between the healthy
+    /// lumen on either side; "sections": the output's diameter at the input's narrowest section
+    /// in D); None when no cross-section could be taken in D.
     pub diameter_stenosis_pct: Option<f64>,
     /// (1 − min input area / healthy area) × 100, the healthy area as the diameter's.
     pub area_stenosis_pct: Option<f64>,
-    /// (1 − min input diameter / normal diameter) × 100: the healthy reference of the
-    /// centreline, fitted over the proximal and distal segments (`stenosis_method` "centerline";
-    /// then equal to `diameter_stenosis_pct`), or the input's diameter of the adjacent normal
+    /// (1 − min input diameter / normal diameter) × 100: the narrower of the healthy lumens on
+    /// either side along the centreline (`stenosis_method` "centerline"; NASCET takes the distal
+    /// one, the narrower in a tapering artery), or the input's diameter of the adjacent normal
     /// segments just outside D ("sections").
     pub nascet_stenosis_pct: Option<f64>,
-    /// The healthy diameter of the NASCET figure, world units.
+    /// The healthy diameter of the diameter stenosis ("centerline": the local reference) or of
+    /// the NASCET figure ("sections"), world units.
     pub reference_diameter: Option<f64>,
     /// How the stenosis was measured: "centerline" (along the input's centreline, independent of
     /// the region's size) or "sections" (across D along the output's local axis, where no
@@ -124,7 +126,7 @@ pub fn region_reports(
             if let Some(a) = along {
                 report.diameter_stenosis_pct = Some(a.diameter_stenosis_pct);
                 report.area_stenosis_pct = Some(a.area_stenosis_pct);
-                report.nascet_stenosis_pct = Some(a.diameter_stenosis_pct);
+                report.nascet_stenosis_pct = Some(a.nascet_stenosis_pct);
                 report.reference_diameter = Some(a.reference_diameter);
                 report.stenosis_method = Some("centerline");
                 report.min_input_diameter = Some(a.min_input_diameter);
