@@ -24,6 +24,7 @@ use crate::report::repair_picture::{render_repair, RepairPictureOptions};
 use crate::report::repair_report::{
     region_reports, surface_measures, RegionReport, SurfaceMeasures,
 };
+use crate::report::text::format_figure;
 use crate::TriMesh;
 use anyhow::Context as _;
 use serde::Serialize;
@@ -505,11 +506,11 @@ fn picture_figures(r: &Report) -> Vec<String> {
         .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))));
     vec![
         format!(
-            "input volume {:.1} {u}³{}   output volume {:.1} {u}³   inpainted {:.1} {u}³",
-            r.input.measures.volume,
+            "input volume {} {u}³{}   output volume {} {u}³   inpainted {} {u}³",
+            format_figure(r.input.measures.volume),
             if r.input_capped { " (ends capped)" } else { "" },
-            r.output.measures.volume,
-            inpainted
+            format_figure(r.output.measures.volume),
+            format_figure(inpainted)
         ),
         format!(
             "stenosis (diameter) {}   watertight {}   method {}{}",

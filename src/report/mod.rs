@@ -14,7 +14,7 @@ pub mod render;
 pub mod repair_picture;
 pub mod repair_report;
 pub mod stenosis;
-mod text;
+pub(crate) mod text;
 
 pub use colormap::ColorMap;
 pub use histogram::{histogram, histogram_grid, Histogram, HistogramFigure, HistogramOptions};

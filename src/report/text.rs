@@ -129,6 +129,20 @@ pub(crate) fn draw_text(
     Ok(())
 }
 
+/// A figure written on a picture: 4 significant digits, in exponent form below 0.01 or from a
+/// million on (a vessel in metres has volumes of some 1e-6 m³, which one decimal shows as 0.0).
+pub(crate) fn format_figure(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let magnitude = v.abs().log10().floor();
+    if !(-2.0..6.0).contains(&magnitude) {
+        return format!("{v:.3e}");
+    }
+    let decimals = (3.0 - magnitude).max(0.0) as usize;
+    format!("{v:.decimals$}")
+}
+
 /// A short decimal form of a tick value (3 significant digits, no "-0").
 pub(crate) fn format_value(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
@@ -145,5 +159,20 @@ pub(crate) fn format_value(v: f64) -> String {
         "0".into()
     } else {
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn figures_keep_four_significant_digits() {
+        assert_eq!(format_figure(11779.93), "11780");
+        assert_eq!(format_figure(945.84), "945.8");
+        assert_eq!(format_figure(0.25), "0.2500");
+        assert_eq!(format_figure(1.2345e-6), "1.234e-6");
+        assert_eq!(format_figure(-3.5e-7), "-3.500e-7");
+        assert_eq!(format_figure(0.0), "0");
     }
 }
