@@ -2,6 +2,7 @@
 //! damaged regions D of a vessel (paper Section 4, Algorithm 4; see [`crate::inpaint::repair`]),
 //! write the repaired watertight mesh, and report the inpainted volume and the stenosis per region.
 
+use super::message::short_number;
 use super::outputs::Outputs;
 use super::region_limits::check_regions;
 use super::repair_budget;
@@ -528,7 +529,10 @@ fn picture_figures(r: &Report) -> Vec<String> {
 
 fn print_summary(r: &Report, secs: f64) {
     let u = &r.units;
-    let v = |x: f64| format!("{x:.4} {u}³");
+    // Six significant digits (exponent form when tiny): a vessel in metres has volumes of some
+    // 1e-6 m³ and radii of 1e-3 m, which fixed decimals print as 0.0000.
+    let n = short_number;
+    let v = |x: f64| format!("{} {u}³", n(x));
     println!(
         "input   {}: volume {}{}",
         r.input.path,
@@ -558,12 +562,12 @@ fn print_summary(r: &Report, secs: f64) {
     for (k, g) in r.regions.iter().enumerate() {
         let pct = |p: Option<f64>| p.map_or("n/a".to_string(), |p| format!("{p:.1}%"));
         println!(
-            "region {} ({:.4}, {:.4}, {:.4}) radius {:.4}: inpainted {} ({:.2}% of the output); stenosis: diameter {}, area {}, NASCET {}",
+            "region {} ({}, {}, {}) radius {}: inpainted {} ({:.2}% of the output); stenosis: diameter {}, area {}, NASCET {}",
             k + 1,
-            g.center[0],
-            g.center[1],
-            g.center[2],
-            g.radius,
+            n(g.center[0]),
+            n(g.center[1]),
+            n(g.center[2]),
+            n(g.radius),
             v(g.inpainted_volume),
             100.0 * g.inpainted_fraction,
             pct(g.diameter_stenosis_pct),
@@ -573,15 +577,19 @@ fn print_summary(r: &Report, secs: f64) {
     }
     for l in &r.loops {
         println!(
-            "loop at ({:.4}, {:.4}, {:.4}) radius {:.4}: {}",
-            l.center[0], l.center[1], l.center[2], l.radius, l.kind
+            "loop at ({}, {}, {}) radius {}: {}",
+            n(l.center[0]),
+            n(l.center[1]),
+            n(l.center[2]),
+            n(l.radius),
+            l.kind
         );
     }
     println!(
-        "method {}, voxel {:.4} {u}, vessel radius ≈ {:.4} {u}, {} iteration(s){}, {:.1} s",
+        "method {}, voxel {} {u}, vessel radius ≈ {} {u}, {} iteration(s){}, {:.1} s",
         r.parameters.method,
-        r.parameters.voxel,
-        r.parameters.radius_estimate,
+        n(r.parameters.voxel),
+        n(r.parameters.radius_estimate),
         r.iterations,
         if r.converged { "" } else { " (not converged)" },
         secs
