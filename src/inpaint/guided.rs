@@ -34,7 +34,8 @@
 //!    flattening vessel changes smoothly across D. On top of this coarse shape, the wall's
 //!    details: at each curve sample and angle, the ray meets the input's wall outside D at some
 //!    offset from that section; these offsets are interpolated along the curve per angle across
-//!    D (issue 21's "details carried across D"; faded out towards a junction point).
+//!    D (issue 21's "details carried across D"; faded out towards a junction point, and not read
+//!    within a junction's flare, whose wall is no single vessel's).
 //! 4. **Field.** At a node x of D, each tube gives |x − c|⊥ − ρ(θ) from its nearest curve sample
 //!    c (the offset projected on the section plane there; past an open anchor end the tube
 //!    continues straight, past a capped end it closes as a ball), and the fill is the smallest
@@ -766,6 +767,14 @@ impl Sections<'_> {
     /// side (the first reading held before the first one; past the last, held when the tube
     /// ends at an anchor (`open_end`), else faded out over one section radius; no offset for
     /// an angle never read).
+    /// Whether `p` lies within a junction's inscribed sphere grown by `r`.
+    fn in_flare(&self, p: &Point3<f64>, r: f64) -> bool {
+        self.centerline
+            .junctions
+            .iter()
+            .any(|j| (p - j.position).norm() < j.radius + r)
+    }
+
     fn carry_details(
         &self,
         points: &[Point3<f64>],
@@ -796,6 +805,11 @@ impl Sections<'_> {
                     let th = TAU * j as f64 / m as f64;
                     let d = f[1] * th.cos() + f[2] * th.sin();
                     let rho = base(i, j);
+                    // Within a junction's flare the wall is no single vessel's (as for the
+                    // anchors' sections).
+                    if self.in_flare(c, rho) {
+                        return None;
+                    }
                     let hit = self.bvh.cast_ray(c, &d, 1.5 * rho)?;
                     let wall = c + d * hit.t;
                     (hit.t > 0.0
