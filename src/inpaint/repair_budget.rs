@@ -7,11 +7,11 @@
 //! The margin is `inpaint::repair::region_margin` plus a voxel, the pad of the whole lattice a
 //! voxel more than the repair's; the estimate only has to bound them from above.
 
+use super::region::Ball;
+use super::repair::{region_margin, RepairOptions};
 use crate::budget;
 use crate::error::short_number;
 use crate::grid::spec::{default_voxel, grid_memory_bytes};
-use super::region::Ball;
-use super::repair::{region_margin, RepairOptions};
 use crate::mesh::measures::{bounding_box, mean_edge_length};
 use crate::TriMesh;
 
