@@ -141,11 +141,11 @@ pub(super) fn repair_file(ctx: &Context, args: &RepairArgs) -> anyhow::Result<Re
         input_path: Some(args.mesh.display().to_string()),
         output_path: Some(args.output.display().to_string()),
     };
-    // The options first (before the mesh is read), in the flags' names.
-    request.validate().map_err(flag_error)?;
     for text in &args.region {
         request.balls.push(parse_ball(text)?);
     }
+    // The options before the mesh is read, in the flags' names.
+    request.validate().map_err(flag_error)?;
     let mesh = read_mesh(&args.mesh)?;
     let read_secs = start.elapsed().as_secs_f64();
     let mut bar: Option<ProgressBar> = None;
