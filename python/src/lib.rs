@@ -79,30 +79,29 @@ fn as_rows_of_3<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py,
     Ok(array)
 }
 
-/// The vertices as points: (n, 3) float64 or float32 (float32 widened exactly).
+/// The vertices as points: (n, 3) float64 or float32 (float32 widened exactly; either byte
+/// order).
 fn vertices_from(obj: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 3]>> {
     let array = as_rows_of_3(obj, "vertices")?;
     let dtype = array.dtype();
-    let rows = |v: numpy::ndarray::ArrayView2<'_, f64>| {
-        v.rows()
-            .into_iter()
-            .map(|r| [r[0], r[1], r[2]])
-            .collect::<Vec<_>>()
-    };
-    match (dtype.kind(), dtype.itemsize()) {
-        (b'f', 8) => {
-            let a = array.cast::<PyArray2<f64>>()?.readonly();
-            Ok(rows(a.as_array()))
-        }
-        (b'f', 4) => {
-            let a = array.cast::<PyArray2<f32>>()?.readonly();
-            Ok(rows(a.as_array().mapv(f64::from).view()))
-        }
-        _ => Err(PyTypeError::new_err(format!(
+    if !(dtype.kind() == b'f' && matches!(dtype.itemsize(), 4 | 8)) {
+        return Err(PyTypeError::new_err(format!(
             "vertices must be float64 or float32, got {}",
             dtype.str()?
-        ))),
+        )));
     }
+    // Native float64: no copy.
+    let array = obj
+        .py()
+        .import("numpy")?
+        .call_method1("asarray", (array, "float64"))?;
+    let array = array.cast::<PyArray2<f64>>()?.readonly();
+    Ok(array
+        .as_array()
+        .rows()
+        .into_iter()
+        .map(|r| [r[0], r[1], r[2]])
+        .collect())
 }
 
 /// The faces as vertex-index triples: (m, 3) of any integer dtype, every index in 0..n.
@@ -172,11 +171,18 @@ fn mesh_from(vertices: &Bound<'_, PyAny>, faces: &Bound<'_, PyAny>) -> PyResult<
     Ok(mesh)
 }
 
+/// A mesh as numpy arrays: vertices float64 (n, 3), faces int64 (m, 3).
+type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
+
+/// What `repair` returns: the repaired mesh's arrays and the report dict.
+type Repaired<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<i64>>,
+    Bound<'py, PyAny>,
+);
+
 /// The mesh as (vertices float64 (n, 3), faces int64 (m, 3)).
-fn arrays_of<'py>(
-    py: Python<'py>,
-    mesh: &TriMesh,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>)> {
+fn arrays_of<'py>(py: Python<'py>, mesh: &TriMesh) -> PyResult<MeshArrays<'py>> {
     let v: Vec<f64> = mesh.vertices.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
     let f: Vec<i64> = mesh.faces.iter().flat_map(|t| t.map(i64::from)).collect();
     let v = PyArray1::from_vec(py, v).reshape([mesh.num_vertices(), 3])?;
@@ -216,7 +222,13 @@ fn regions_from(obj: Option<&Bound<'_, PyAny>>) -> PyResult<(Vec<Ball>, Option<P
     }
     let mut balls = Vec::new();
     for (k, item) in obj.try_iter()?.enumerate() {
-        let [x, y, z, r] = item?.extract::<[f64; 4]>().map_err(|_| {
+        let item = item?;
+        // A row of a numpy array is no Python sequence: its list is.
+        let item = match item.hasattr("tolist")? {
+            true => item.call_method0("tolist")?,
+            false => item,
+        };
+        let [x, y, z, r] = item.extract::<[f64; 4]>().map_err(|_| {
             PyTypeError::new_err(format!(
                 "regions[{k}] must be (x, y, z, radius); regions is a file path or a sequence of them"
             ))
@@ -279,11 +291,7 @@ fn repair<'py>(
     open_ends: bool,
     decimate: Option<&Bound<'py, PyAny>>,
     max_memory: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(
-    Bound<'py, PyArray2<f64>>,
-    Bound<'py, PyArray2<i64>>,
-    Bound<'py, PyAny>,
-)> {
+) -> PyResult<Repaired<'py>> {
     let method: InpaintMethod = method
         .parse()
         .map_err(|e: Error| PyValueError::new_err(e.to_string()))?;
@@ -345,10 +353,7 @@ fn repair<'py>(
 /// Reads a mesh file (.stl, .obj, .ply, .vtp, .vtk) as (vertices float64 (n, 3), faces int64
 /// (m, 3)), checked as the CLI checks it.
 #[pyfunction]
-fn read_mesh<'py>(
-    py: Python<'py>,
-    path: PathBuf,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>)> {
+fn read_mesh<'py>(py: Python<'py>, path: PathBuf) -> PyResult<MeshArrays<'py>> {
     let mesh = py
         .detach(|| vesselmsr::io::read_mesh(&path))
         .map_err(py_error)?;

@@ -143,6 +143,8 @@ def test_float32_and_int32_arrays_give_the_same_repair(damaged_cli):
     wide[:, ::2] = f32
     result = vesselmsr.repair(v32, wide[:, ::2], units="mm")
     assert_same_repair(result, damaged_cli)
+    # Big-endian float64 vertices read the same.
+    assert vesselmsr.mesh_info(v.astype(">f8"), f) == vesselmsr.mesh_info(v, f)
 
 
 def test_regions_as_balls_equal_the_cli_region_flag(tmp_path):
@@ -157,6 +159,10 @@ def test_regions_as_balls_equal_the_cli_region_flag(tmp_path):
     cv, cf = vesselmsr.read_mesh(out)
     result = vesselmsr.repair(v, f, holes=False, regions=[(x, y, z, radius)], method="axial")
     assert_same_repair(result, (cv, cf, json.loads(rep.read_text())))
+    # The same ball as a (1, 4) numpy array.
+    again = vesselmsr.repair(v, f, holes=False, regions=np.array([[x, y, z, radius]]),
+                             method="axial")
+    assert np.array_equal(again[0], result[0]) and np.array_equal(again[1], result[1])
     assert result[2]["regions"][0]["source"] == "region"
     assert result[2]["parameters"]["method"] == "axial"
 
