@@ -147,10 +147,10 @@ def test_float32_and_int32_arrays_give_the_same_repair(damaged_cli):
     assert vesselmsr.mesh_info(v.astype(">f8"), f) == vesselmsr.mesh_info(v, f)
 
 
-def test_regions_as_balls_equal_the_cli_region_flag(tmp_path):
+def test_regions_as_balls_equal_the_cli_region_flag(tmp_path, damaged_cli):
     v, f = vesselmsr.read_mesh(DAMAGED)
     # The hole's region as the CLI found it, given as a ball.
-    _, _, r = cli_repair(DAMAGED, "mm", tmp_path)
+    r = damaged_cli[2]
     x, y, z = r["regions"][0]["center"]
     radius = r["regions"][0]["radius"]
     out, rep = tmp_path / "ball.vtp", tmp_path / "ball.json"
