@@ -25,6 +25,24 @@ pub enum Error {
     /// A geometric operation could not be carried out.
     #[error("{0}")]
     Geometry(String),
+    /// An option of a request is out of range (named as the library names it, e.g. `voxel`;
+    /// the CLI and the Python package print their own spelling of the name).
+    #[error("{option} {problem}")]
+    BadOption {
+        option: &'static str,
+        problem: String,
+    },
+    /// Work refused before it starts: its memory estimate exceeds the budget, or it asks for
+    /// more than a limit allows (too many regions).
+    #[error("{0}")]
+    Refused(String),
+    /// An error with what was being done when it happened (e.g. the mesh's name).
+    #[error("{context}: {source}")]
+    Context {
+        context: String,
+        #[source]
+        source: Box<Error>,
+    },
 }
 
 impl Error {
@@ -41,6 +59,39 @@ impl Error {
             path: path.to_path_buf(),
             message: message.into(),
         }
+    }
+}
+
+impl Error {
+    /// This error with `context` (what was being done, or on what) before it.
+    pub fn context(self, context: impl Into<String>) -> Self {
+        let context = context.into();
+        if context.is_empty() {
+            return self;
+        }
+        Error::Context {
+            context,
+            source: Box::new(self),
+        }
+    }
+}
+
+/// `v` with 6 significant digits, in exponent form when very large or small (numbers in
+/// messages).
+pub fn short_number(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let magnitude = v.abs().log10().floor();
+    if !(-4.0..15.0).contains(&magnitude) {
+        return format!("{v:.5e}");
+    }
+    let decimals = (5.0 - magnitude).max(0.0) as usize;
+    let text = format!("{v:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
     }
 }
 

@@ -9,6 +9,7 @@
 //! multiscale representation: decompose, reconstruct, archive), `report` (figures), and `cli`
 //! (the command-line tool; `main.rs` only calls it).
 
+pub mod budget;
 pub mod bvh;
 pub mod centerline;
 pub mod cli;

@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# The project's test command (what CI runs): the Rust tests and the Python reference oracle's own
-# tests, a few minutes from a warm build. Run from anywhere; extra arguments go to `cargo test`.
+# The project's test command (what CI runs): the Rust tests, the Python reference oracle's own
+# tests, and the Python package (python/: its wheel built by maturin, installed into the oracle
+# venv, and its pytest), a few minutes from a warm build. Run from anywhere; extra arguments go
+# to `cargo test`.
 #
 #   bash tests/run_all.sh                 # the quick suite
-#   bash tests/run_all.sh --test io       # cargo test --release --test io, then pytest
+#   bash tests/run_all.sh --test io       # cargo test --release --test io, then the Python steps
 #   bash tests/run_slow.sh                # the slow real-mesh studies only (= run_all.sh --slow)
 #
 # The slow studies are Rust tests in a module `slow` marked
@@ -14,6 +16,11 @@
 # $VESSELMSR_SKIPPED (tests/common/mod.rs `skip`), listed in the summary with the ignored tests.
 # The oracle venv (reference/.venv) is created on first use and rebuilt whenever
 # reference/requirements.txt changes (its sha256 is stamped inside the venv).
+#
+# `cargo test --workspace` tests the root package only (python/ has no Rust tests) but resolves
+# the dependencies' features together with python/'s, so the wheel's `maturin build --release`
+# (same target dir) reuses the compiled library and its dependencies: it compiles only the
+# bindings (seconds) instead of the whole tree again.
 set -euo pipefail
 
 slow=false
@@ -27,7 +34,7 @@ ROOT="$(pwd)"
 VENV="$ROOT/reference/.venv"
 REQ="$ROOT/reference/requirements.txt"
 STAMP="$VENV/.requirements.sha256"
-if $slow; then steps=2; else steps=3; fi
+if $slow; then steps=2; else steps=5; fi
 
 step() { printf '\n==== [%s/%s] %s\n' "$1" "$steps" "${*:2}"; }
 
@@ -56,10 +63,10 @@ export VESSELMSR_PYTHON="$VENV/bin/python"
 rust_start=$SECONDS
 if $slow; then
     step 2 "cargo test --release $* -- --ignored slow:: (the slow real-mesh studies)"
-    cargo_args=(--release --no-fail-fast "$@" -- --ignored slow::)
+    cargo_args=(--release --workspace --no-fail-fast "$@" -- --ignored slow::)
 else
     step 2 "cargo test --release $*"
-    cargo_args=(--release --no-fail-fast "$@")
+    cargo_args=(--release --workspace --no-fail-fast "$@")
 fi
 rust_status=0
 cargo test "${cargo_args[@]}" 2>&1 | tee "$LOG" || rust_status=$?
@@ -67,11 +74,32 @@ rust_seconds=$((SECONDS - rust_start))
 
 py_status=0
 py_seconds=0
+wheel_status=0
+wheel_seconds=0
+pkg_status=0
+pkg_seconds=0
 if ! $slow && [[ $rust_status -eq 0 ]]; then
     step 3 "pytest reference (oracle self-tests)"
     py_start=$SECONDS
     "$VESSELMSR_PYTHON" -m pytest -q reference || py_status=$?
     py_seconds=$((SECONDS - py_start))
+
+    step 4 "Python package: maturin build --release (python/), pip install into reference/.venv"
+    wheel_start=$SECONDS
+    {
+        "$VENV/bin/maturin" build --release --manifest-path "$ROOT/python/Cargo.toml" \
+            --interpreter "$VESSELMSR_PYTHON" --out "$WORK/wheels" &&
+            "$VESSELMSR_PYTHON" -m pip install --quiet --disable-pip-version-check \
+                --force-reinstall --no-deps "$WORK"/wheels/vesselmsr-*.whl
+    } || wheel_status=$?
+    wheel_seconds=$((SECONDS - wheel_start))
+
+    if [[ $wheel_status -eq 0 ]]; then
+        step 5 "pytest python/tests (the Python package against the CLI, Dask cohort)"
+        pkg_start=$SECONDS
+        "$VESSELMSR_PYTHON" -m pytest -q python/tests || pkg_status=$?
+        pkg_seconds=$((SECONDS - pkg_start))
+    fi
 fi
 
 # Summary: counts of the Rust tests, the ignored tests by reason, the tests that skipped checks.
@@ -109,12 +137,13 @@ fi
 if $slow; then
     echo "time: cargo test ${rust_seconds} s"
 else
-    echo "time: cargo test ${rust_seconds} s, pytest ${py_seconds} s"
+    echo "time: cargo test ${rust_seconds} s, pytest reference ${py_seconds} s, wheel build and install ${wheel_seconds} s, pytest python ${pkg_seconds} s"
 fi
 
 echo
-if [[ $rust_status -ne 0 || $py_status -ne 0 ]]; then
-    echo "run_all: FAILED (cargo test exit $rust_status, pytest exit $py_status)"
+if [[ $rust_status -ne 0 || $py_status -ne 0 || $wheel_status -ne 0 || $pkg_status -ne 0 ]]; then
+    echo "run_all: FAILED (cargo test exit $rust_status, pytest reference exit $py_status," \
+        "wheel build exit $wheel_status, pytest python exit $pkg_status)"
     exit 1
 fi
 if $slow; then

@@ -134,23 +134,8 @@ fn significant_digits(token: &str) -> usize {
         .count()
 }
 
-/// `v` with 6 significant digits, in exponent form when very large or small.
-pub fn short_number(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let magnitude = v.abs().log10().floor();
-    if !(-4.0..15.0).contains(&magnitude) {
-        return format!("{v:.5e}");
-    }
-    let decimals = (DIGITS as f64 - 1.0 - magnitude).max(0.0) as usize;
-    let text = format!("{v:.decimals$}");
-    if text.contains('.') {
-        text.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        text
-    }
-}
+/// `v` with 6 significant digits (the library's, so its messages shorten numbers alike).
+pub use crate::error::short_number;
 
 #[cfg(test)]
 mod tests {

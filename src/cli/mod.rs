@@ -4,7 +4,6 @@
 //! succeeded (`outputs`); the memory budget is `budget`.
 
 mod batch;
-mod budget;
 mod cap;
 mod centerline;
 mod compare;
@@ -18,13 +17,12 @@ mod phantom;
 mod profile;
 mod progress;
 mod reconstruct;
-mod region_limits;
 mod remesh;
 mod repair;
-mod repair_budget;
 mod stenosis;
 mod voxelize;
 
+use crate::budget;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 

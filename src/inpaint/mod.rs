@@ -1,6 +1,7 @@
 //! Vessel repair by surface inpainting (paper Section 4, Algorithm 4 with eq. 4.1 and 4.2):
 //! the damaged regions D (`region`), synthetic damaged vessels with known truth (`phantom`), and
-//! the inpainting loop itself.
+//! the inpainting loop itself (`repair`), and the whole repair of a vessel as the CLI and the
+//! Python package run it (`pipeline`: regions, checks, repair, report).
 
 pub mod axial;
 pub mod axis;
@@ -13,7 +14,10 @@ pub mod mask;
 pub mod msr_fill;
 pub mod paper;
 pub mod phantom;
+pub mod pipeline;
 pub mod region;
+pub mod region_limits;
 pub mod repair;
+pub mod repair_budget;
 pub mod stitch;
 pub mod topology;

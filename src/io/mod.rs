@@ -111,6 +111,13 @@ pub fn parse_mesh(bytes: &[u8], format: MeshFormat) -> std::result::Result<TriMe
     Ok(mesh)
 }
 
+/// Checks a mesh that came from no file (arrays handed over by the Python package) as every
+/// mesh read is checked: finite coordinates, indices in range, at least one non-degenerate
+/// triangle ([`Error::InvalidMesh`] naming the first problem).
+pub fn check_mesh(mesh: &TriMesh) -> Result<()> {
+    validate::validate_mesh(mesh).map_err(Error::InvalidMesh)
+}
+
 /// Named per-vertex scalar fields, as read from PLY, VTP or VTK.
 pub type ScalarFields = Vec<(String, Vec<f32>)>;
 

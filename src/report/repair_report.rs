@@ -1,12 +1,16 @@
 //! The report of a repair (issue: vessel repair): input and output volumes, and per region D the
 //! inpainted volume (output minus input inside D), its fraction of the whole output volume (the
 //! paper's Section 4 figure: the share of the recovered vessel that was missing) and the stenosis
-//! estimate of [`super::stenosis`] (input against output at the same cross-sections).
+//! estimate of [`super::stenosis`] (input against output at the same cross-sections); and the
+//! whole report ([`RepairReport`]) that `vesselmsr repair --report` writes as JSON and the Python
+//! package returns as a dict.
 
 use super::stenosis::{measure_stenosis_with, volume_in_ball_with, StenosisOptions};
 use crate::bvh::{WindingNumber, WindingOptions};
 use crate::centerline::healthy::HealthyVessel;
+use crate::inpaint::guided::GuideKind;
 use crate::inpaint::region::Ball;
+use crate::mesh::decimate::DecimateReport;
 use crate::mesh::info::MeshInfo;
 use crate::mesh::measures::signed_volume;
 use crate::TriMesh;
@@ -70,6 +74,67 @@ pub struct SurfaceMeasures {
     pub components: usize,
     /// Boundary edges (0: closed).
     pub boundary_edges: usize,
+}
+
+/// The input or the output of a repair: its file, when there is one, and its measures.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshPart {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path: Option<String>,
+    #[serde(flatten)]
+    pub measures: SurfaceMeasures,
+}
+
+/// A boundary loop of the input (`--holes`): its kind (`open vessel end` or `hole`) and shape.
+#[derive(Debug, Clone, Serialize)]
+pub struct LoopReport {
+    pub kind: &'static str,
+    pub center: [f64; 3],
+    pub radius: f64,
+    pub planarity: f64,
+}
+
+/// The parameters a repair used (given or defaulted), and how it went.
+#[derive(Debug, Clone, Serialize)]
+pub struct RepairParameters {
+    pub method: &'static str,
+    pub voxel: f64,
+    pub grid_dims: [usize; 3],
+    pub radius_estimate: f64,
+    pub c: f64,
+    pub time: f64,
+    pub epsilon: f64,
+    pub keep_outside: bool,
+    pub open_ends: bool,
+    pub stitched: bool,
+    pub junctions: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fallback: Option<String>,
+    pub axes: Vec<[f64; 3]>,
+    /// The centreline fill's curves, by kind.
+    pub guides: Vec<GuideKind>,
+}
+
+/// The whole report of a repair (`repair --report R.json`; the keys are in the README).
+#[derive(Debug, Clone, Serialize)]
+pub struct RepairReport {
+    pub units: String,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notices: Vec<String>,
+    pub input: MeshPart,
+    pub input_capped: bool,
+    pub output: MeshPart,
+    pub regions: Vec<RegionReport>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub loops: Vec<LoopReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub decimate: Option<DecimateReport>,
+    pub watertight: bool,
+    pub iterations: usize,
+    pub converged: bool,
+    pub parameters: RepairParameters,
+    /// Seconds per phase.
+    pub timings: serde_json::Map<String, serde_json::Value>,
 }
 
 /// The measures of the report, from the mesh's [`MeshInfo`].

@@ -1,6 +1,7 @@
-//! The CLI's one memory budget (`--max-memory SIZE`, a global flag): every grid, sample set and
-//! archive member a command allocates is estimated first and refused when the estimate exceeds
-//! it, with one message naming the flags ([`check`]).
+//! The one memory budget (the CLI's `--max-memory SIZE`, a global flag; the Python package's
+//! `max_memory`): every grid, sample set and archive member a command allocates is estimated
+//! first and refused when the estimate exceeds it, with one message naming the flags
+//! ([`check`]).
 //!
 //! The default is half the machine's memory (`MemTotal` of `/proc/meminfo`), and at most half the
 //! process's address-space limit (`ulimit -v`, from `/proc/self/limits`) so that an estimate
@@ -8,11 +9,12 @@
 //! stacks); 8 GiB where neither can be read.
 
 use crate::grid::spec::{format_bytes, parse_memory_size, DEFAULT_MAX_MEMORY_BYTES};
+use crate::{Error, Result};
 
 /// The budget in bytes: `--max-memory` when given, else the default of the module doc.
-pub fn max_memory(flag: Option<&str>) -> anyhow::Result<u64> {
+pub fn max_memory(flag: Option<&str>) -> Result<u64> {
     match flag {
-        Some(text) => Ok(parse_memory_size(text)?),
+        Some(text) => parse_memory_size(text),
         None => Ok(default_max_memory()),
     }
 }
@@ -59,11 +61,12 @@ const BYTES_PER_SAMPLE: u64 = 32;
 
 /// Refuses a sample count (of `flag`) above [`MAX_SAMPLES`] or whose two sample sets exceed the
 /// budget `max`.
-pub fn check_samples(flag: &str, samples: usize, max: u64) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        samples <= MAX_SAMPLES,
-        "{flag} {samples} is more than the {MAX_SAMPLES} samples per surface allowed"
-    );
+pub fn check_samples(flag: &str, samples: usize, max: u64) -> Result<()> {
+    if samples > MAX_SAMPLES {
+        return Err(Error::Refused(format!(
+            "{flag} {samples} is more than the {MAX_SAMPLES} samples per surface allowed"
+        )));
+    }
     let bytes = (samples as u64).saturating_mul(2 * BYTES_PER_SAMPLE);
     check(
         &format!("{flag} {samples}"),
@@ -75,13 +78,13 @@ pub fn check_samples(flag: &str, samples: usize, max: u64) -> anyhow::Result<()>
 
 /// Refuses `what` when its estimate `bytes` exceeds `max`: "{what} needs about X, more than the Y
 /// memory limit: {advice}raise --max-memory".
-pub fn check(what: &str, bytes: u64, max: u64, advice: &str) -> anyhow::Result<()> {
+pub fn check(what: &str, bytes: u64, max: u64, advice: &str) -> Result<()> {
     if bytes > max {
-        anyhow::bail!(
+        return Err(Error::Refused(format!(
             "{what} needs about {}, more than the {} memory limit: {advice}raise --max-memory",
             format_bytes(bytes),
             format_bytes(max)
-        );
+        )));
     }
     Ok(())
 }

@@ -1,14 +1,12 @@
-//! Limits on the regions D of `repair`: repeated balls (the same ball listed twice, or a ball
+//! Limits on the regions D of a vessel repair: repeated balls (the same ball listed twice, or a ball
 //! inside another) are dropped with a notice, and more than [`MAX_REGIONS`] distinct balls are
 //! refused, naming where they came from (each ball costs a pass over the grid around D). Balls
 //! are checked against the mesh per source, so a bad ball of a regions file is reported with the
 //! JSON file's name.
 
-use super::Context;
-use crate::inpaint::region::{validate_regions, Ball};
+use super::region::{validate_regions, Ball};
 use crate::mesh::weld::weld_key;
-use crate::TriMesh;
-use anyhow::Context as _;
+use crate::{Error, Result, TriMesh};
 use std::collections::HashSet;
 
 /// Most distinct regions a repair takes.
@@ -20,14 +18,14 @@ const MAX_COMPARED: usize = 20 * MAX_REGIONS;
 
 /// Checks each source's balls against `mesh` (errors name the source: the regions file, or the
 /// mesh for the others), then drops repeated balls in place (with their sources) and refuses
-/// more than [`MAX_REGIONS`].
+/// more than [`MAX_REGIONS`]; the notice of dropped balls goes to `notice`.
 pub fn check_regions(
-    ctx: &Context,
     mesh: &TriMesh,
     mesh_name: &str,
     balls: &mut Vec<Ball>,
     sources: &mut Vec<String>,
-) -> anyhow::Result<()> {
+    notice: &mut dyn FnMut(&str),
+) -> Result<()> {
     let mut names: Vec<&String> = Vec::new();
     for s in sources.iter() {
         if !names.contains(&s) {
@@ -43,7 +41,7 @@ pub fn check_regions(
             .collect();
         // "regions file X" names X; the others are about the mesh.
         let about = name.strip_prefix("regions file ").unwrap_or(mesh_name);
-        validate_regions(mesh, &group).with_context(|| about.to_string())?;
+        validate_regions(mesh, &group).map_err(|e| e.context(about))?;
     }
     let before = balls.len();
     let mut seen = HashSet::new();
@@ -75,7 +73,7 @@ pub fn check_regions(
     let mut k = keep.iter();
     sources.retain(|_| *k.next().unwrap_or(&true));
     if balls.len() < before {
-        ctx.notice(&format!(
+        notice(&format!(
             "{} of the {before} regions repeat another or lie inside another and were dropped",
             before - balls.len()
         ));
@@ -83,12 +81,12 @@ pub fn check_regions(
     if balls.len() > MAX_REGIONS {
         let mut from: Vec<&str> = sources.iter().map(String::as_str).collect();
         from.dedup();
-        anyhow::bail!(
+        return Err(Error::Refused(format!(
             "{} distinct regions ({}): at most {MAX_REGIONS} are repaired at once; merge them \
              into fewer, larger balls",
             balls.len(),
             from.join(", ")
-        );
+        )));
     }
     Ok(())
 }

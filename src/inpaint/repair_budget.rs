@@ -1,4 +1,4 @@
-//! The memory check of `repair`, before any grid is allocated: an upper bound of the grids
+//! The memory check of a vessel repair, before any grid is allocated: an upper bound of the grids
 //! [`crate::inpaint::repair::repair`] sizes (the sub-box around D, and the lattice of the whole
 //! vessel its fallback re-mesh voxelizes), from the same voxel rule and margins, against the
 //! budget (`--max-memory`). Refused with one message naming `--voxel`, the regions and
@@ -7,10 +7,11 @@
 //! The margin is `inpaint::repair::region_margin` plus a voxel, the pad of the whole lattice a
 //! voxel more than the repair's; the estimate only has to bound them from above.
 
-use super::budget;
+use super::region::Ball;
+use super::repair::{region_margin, RepairOptions};
+use crate::budget;
+use crate::error::short_number;
 use crate::grid::spec::{default_voxel, grid_memory_bytes};
-use crate::inpaint::region::Ball;
-use crate::inpaint::repair::{region_margin, RepairOptions};
 use crate::mesh::measures::{bounding_box, mean_edge_length};
 use crate::TriMesh;
 
@@ -27,7 +28,7 @@ pub fn check(
     balls: &[Ball],
     opts: &RepairOptions,
     max_bytes: u64,
-) -> anyhow::Result<()> {
+) -> crate::Result<()> {
     let (lo, hi) = bounding_box(mesh);
     let h = match opts.voxel {
         Some(v) => v,
@@ -64,11 +65,11 @@ pub fn check(
         grid_memory_bytes(n, grids)
     };
     let need = bytes(sub, SUB_BOX_GRIDS).max(bytes(whole, WHOLE_GRIDS));
-    let shown = |d: [f64; 3]| d.map(|n| super::message::short_number(n.floor())).join("×");
+    let shown = |d: [f64; 3]| d.map(|n| short_number(n.floor())).join("×");
     budget::check(
         &format!(
             "repairing at voxel {} (grids of about {} nodes around D, {} for the whole vessel)",
-            super::message::short_number(h),
+            short_number(h),
             shown(sub),
             shown(whole)
         ),
