@@ -64,7 +64,11 @@ pub fn volume_in_ball_with(mesh: &TriMesh, winding: &WindingNumber, ball: &Ball)
     let sign = orientation_sign(mesh, &ball.center);
     let bvh = winding.bvh();
     let r = ball.radius;
-    let mesh_part: f64 = slots_in_ball(bvh, &ball.center, r)
+    // Summed in face order, not the BVH's leaf order (its build need not be the same from run
+    // to run), so the figure is the same bits every time.
+    let mut slots = slots_in_ball(bvh, &ball.center, r);
+    slots.sort_by_key(|&slot| bvh.slot_face(slot));
+    let mesh_part: f64 = slots
         .iter()
         .map(|&slot| {
             let clip = clip_triangle_to_ball(bvh.slot_triangle(slot), &ball.center, r);
