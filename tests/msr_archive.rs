@@ -2,8 +2,9 @@
 //! bounds (samples of every level within half a lattice step per axis, input vertices exact,
 //! normals within a degree, φ_T within h/128 near the surface); NumPy's `np.load` (no pickling)
 //! reads every member and decodes samples, normals and φ_T with the documented formulas to the
-//! values the reader gives; an archive of the float64 layout of earlier builds reads back
-//! exactly; archives of another version, truncated, with members edited out of shape or range,
+//! values the reader gives (also the refined samples of a decomposition's archive); an archive
+//! of the float64 layout of earlier builds reads back exactly, one of the version-3 layout
+//! within its lattice; archives of another version, truncated, with members edited out of shape or range,
 //! or needing more memory decoded than allowed are refused with an error naming the file and
 //! the member. Also the vertex reconstruction X_k = X_N − Σ_{i>k} W_i (the input:
 //! X_0 less the snap) and the samples each level's level-set reconstruction reads (a sample
@@ -341,6 +342,66 @@ fn archive_round_trips_within_its_lattice_and_numpy_decodes_it() {
     }
 }
 
+/// A decomposition's archive has refined pairs (the writer checks the level-set rebuild from
+/// the codes): NumPy decodes them as the reader does.
+#[test]
+fn numpy_decodes_the_refined_samples_of_a_decomposition() {
+    use vesselmsr::grid::{grid_for_mesh, GridOptions};
+    use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
+    use vesselmsr::mesh::primitives::torus;
+    use vesselmsr::msr::decompose::{decompose, DecomposeOptions};
+    let mesh = torus(6.0, 2.0, 48, 16, Point3::origin());
+    let grid = GridOptions {
+        voxel: Some(0.5),
+        padding_voxels: 6,
+        ..Default::default()
+    };
+    let spec = grid_for_mesh(&mesh, &grid).unwrap();
+    let phi = voxelize(
+        &mesh,
+        spec.dims,
+        spec.transform,
+        &VoxelizeOptions::default(),
+    )
+    .unwrap();
+    let opts = DecomposeOptions {
+        levels: 3,
+        ..Default::default()
+    };
+    let msr = decompose(&mesh, phi, &opts, |_, _| {}).unwrap().msr;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("torus.msr.npz");
+    write_msr(&path, &msr).unwrap();
+    let back = read_msr(&path).unwrap();
+    let v = run_python(NUMPY_DECODER, &[&path]);
+    let refined = v["refined"].as_u64().unwrap();
+    assert!(refined > 0, "no refined pairs");
+    let flat = |k: &str| -> Vec<f64> {
+        let mut out = Vec::new();
+        let mut walk = vec![&v[k]];
+        while let Some(x) = walk.pop() {
+            match x {
+                serde_json::Value::Array(a) => walk.extend(a.iter().rev()),
+                x => out.push(x.as_f64().unwrap()),
+            }
+        }
+        out
+    };
+    let samples: Vec<f64> = back.samples.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+    let xn = flat("x_n");
+    assert_eq!(xn.len(), samples.len());
+    for (a, b) in xn.iter().zip(&samples) {
+        assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+    }
+    let normals: Vec<f64> = (back.normals.iter().flatten())
+        .flat_map(|p| [p.x, p.y, p.z])
+        .collect();
+    for (a, b) in flat("normal_vectors").iter().zip(&normals) {
+        assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+    }
+    println!("{refined} refined pairs of {} samples", msr.samples.len());
+}
+
 /// The NumPy decoder of the archive module doc: prints the members' shapes and dtypes, the
 /// version, X_N, n_0..n_N and φ_T as JSON.
 const NUMPY_DECODER: &str = r#"
@@ -351,7 +412,7 @@ out = {k: {"shape": list(z[k].shape), "dtype": z[k].dtype.str} for k in z.files}
 out["version"] = int(z["format_version"])
 m = 127
 sg = lambda x: np.where(x < 0, -1.0, 1.0)
-def unit(c):
+def unit(c, m=m):
     u, v = c[..., 0] / m, c[..., 1] / m
     w = 1 - np.abs(u) - np.abs(v)
     n = np.stack([np.where(w < 0, (1 - np.abs(v)) * sg(u), u), np.where(w < 0, (1 - np.abs(u)) * sg(v), v), w], -1)
@@ -373,6 +434,11 @@ pos = np.concatenate([verts, verts[f[:, 0]] * b[:, 0:1] + verts[f[:, 1]] * b[:, 
 added = z["added_at"].T.astype(np.int64)
 born = z["born"].astype(np.int64)
 S, I, V, N = len(born), len(pos), len(verts), len(z["times"]) - 1
+# The refined (level, sample) pairs: a finer normal code and a position offset in steps of q/64.
+rk = np.cumsum(z["refine_key_steps"].astype(np.int64))
+rl, rs = rk // S, rk % S
+rp = z["refine_position"].T * (q / 64)
+rn = z["refine_normal"].T.astype(np.int64)
 # The order P: Morton code of each sample's voxel at birth, ties by index.
 cell = np.concatenate([np.floor((pos - o) / h), np.floor(added * qb / h)]).astype(np.int64)
 cell = np.clip(cell + 2**20, 0, 2**21 - 1)
@@ -402,13 +468,22 @@ for i in range(N + 1):
     codes[here] = new[here]
     if i == 0:
         codes[V:I] = st[0][V:I] + code(cross)
-    n.append(np.where((born > i)[:, None], 0.0, unit(codes)))
+    ni = np.where((born > i)[:, None], 0.0, unit(codes))
+    j = (rl == i) & ~(codes[rs] == m + 1).all(-1)
+    ni[rs[j]] = unit(32 * codes[rs[j]] + rn[j], 32 * m)
+    n.append(ni)
 snap = (z["snap_normal"][:, None] * n[0][:I] + z["snap_residual"].T) * qb
+j = rl == born[rs]
+snap[rs[j & (rs < I)]] = snap[rs[j & (rs < I)]] + rp[j & (rs < I)]
 x = np.concatenate([pos + snap, o + added * qb])
+x[rs[j & (rs >= I)]] = x[rs[j & (rs >= I)]] + rp[j & (rs >= I)]
 for i in range(1, N + 1):
     w = along(z["normal_details"][i - 1].astype(np.int64), born < i)
     d = (w[:, None] * n[i] + z["residuals"][i - 1].T) * q
+    j = (rl == i) & (born[rs] < i)
+    d[rs[j]] = d[rs[j]] + rp[j]
     x = x + np.where((born >= i)[:, None], 0.0, d)
+out["refined"] = int(len(rk))
 c = z["phi"].astype(np.float64)
 far = float(z["phi_far"])
 phi = np.where(np.abs(c) <= 64, c * h / 64, np.sign(c) * (h + (np.abs(c) - 64) * far))
@@ -490,6 +565,13 @@ fn damaged_archives_are_refused() {
         (
             edited("face_normal_sign", Some(NpyArray::scalar_i64(0))),
             "face_normal_sign",
+        ),
+        (
+            edited(
+                "refine_key_steps",
+                Some(NpyArray::new(&[1], NpyData::I8(vec![100]))),
+            ),
+            "refine_key_steps",
         ),
         (
             edited(

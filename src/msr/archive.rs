@@ -1,7 +1,7 @@
 //! The MSR file: one NumPy `.npz` archive (`np.load` opens it, no pickling) holding an [`Msr`]
 //! and its parameters, with a format name and version. Version 4 (written) stores the
 //! representation in the predicted integer codes of [`super::compact`], its members
-//! bzip2-compressed (a zip method Python's `zipfile` reads): 1.6 to 4.6× the input mesh file's
+//! bzip2-compressed (a zip method Python's `zipfile` reads): 1.6 to 4.7× the input mesh file's
 //! size on the shared vessels, where version 3 ([`super::compact_v3`], the codes themselves)
 //! took 2.1 to 6.1× and version 2 (float64 arrays, deflated) 40 to 140×; versions 2 and 3 are
 //! still read.
@@ -19,6 +19,10 @@
 //! level each sample joined at, 0 for the input's), `face_normal_sign` (int64 ±1),
 //! `normals` (int (N+1)×2×S: the octahedral codes of n_0..n_N, predicted), `normal_details`
 //! (int N×S: w, predicted) and `residuals` (int N×3×S: r; the detail W_i = q·(w·n̂_i + r)),
+//! `refine_key_steps` (int R: the refined (level, sample) pairs as level·S + sample, increasing,
+//! each less the one before), `refine_position` (int 3×R: an offset of X_level in steps of q/64)
+//! and `refine_normal` (int 2×R: n_level's code on a 32 times finer grid, m = 127·32, less 32
+//! times its code),
 //! `times` (float64 N+1), `phi` (int8 nz×ny×nx, x fastest: φ_T's codes), `phi_origin` (float64
 //! 3), `phi_voxel` (float64 h) and `phi_far` (float64). Coordinates are in the units of the
 //! input mesh. Nothing is stored for a sample before its birth (those entries are 0): its
@@ -40,7 +44,9 @@
 //! rounded with `np.rint`·m), and for those born before i the code at i − 1 plus the change,
 //! along P over them. The snap is (t·n̂_0 + r)·q_b; each sample starts at its input position
 //! plus its snap, or `phi_origin` + `added_at`·q_b, and at each level i above its birth moves
-//! by (w·n̂_i + r)·q with w along P over the samples born before i. φ_T = c·h/64 for |c| ≤ 64,
+//! by (w·n̂_i + r)·q with w along P over the samples born before i; a refined pair's normal is
+//! that of its finer code and its offset is added to its position at that level (at its
+//! birth, to its starting position). φ_T = c·h/64 for |c| ≤ 64,
 //! else sign(c)·(h + (|c| − 64)·phi_far).
 //!
 //! Version 3 members differ in `extra_face` (int64 I−V, the faces), `snap` (int 3×I, in steps
@@ -91,6 +97,16 @@ pub fn write_msr(path: &Path, msr: &Msr) -> Result<()> {
         .scan(0i64, |before, &f| {
             let d = f as i64 - *before;
             *before = f as i64;
+            Some(d as i32)
+        })
+        .collect();
+    let refined = c.refine_key.len();
+    let key_steps: Vec<i32> = c
+        .refine_key
+        .iter()
+        .scan(0u64, |before, &k| {
+            let d = k - *before;
+            *before = k;
             Some(d as i32)
         })
         .collect();
@@ -153,6 +169,18 @@ pub fn write_msr(path: &Path, msr: &Msr) -> Result<()> {
         (
             "residuals",
             NpyArray::new(&[n, 3, s], ints(&planes(&c.residuals, 3, n))),
+        ),
+        (
+            "refine_key_steps",
+            NpyArray::new(&[refined], ints(&key_steps)),
+        ),
+        (
+            "refine_position",
+            NpyArray::new(&[3, refined], ints(&planes(&c.refine_position, 3, 1))),
+        ),
+        (
+            "refine_normal",
+            NpyArray::new(&[2, refined], ints(&planes(&c.refine_normal, 2, 1))),
         ),
         (
             "times",
@@ -548,6 +576,30 @@ fn read_compact(
         };
         return decode_msr_v3(&compact).map_err(bad);
     }
+    // The refined pairs: keys increasing within (N+1)·S, with their offsets and normals.
+    let (_, steps) =
+        int_array(take("refine_key_steps")?, "refine_key_steps", &[None]).map_err(&bad)?;
+    let r = steps.len();
+    let mut refine_key = Vec::with_capacity(r);
+    let mut key = 0u64;
+    for (j, &d) in steps.iter().enumerate() {
+        if d < 0 || (j > 0 && d == 0) || key + d as u64 >= ((levels + 1) * s) as u64 {
+            return Err(bad(format!(
+                "member 'refine_key_steps': entry {j} ({d}) does not give an increasing key                  below {}",
+                (levels + 1) * s
+            )));
+        }
+        key += d as u64;
+        refine_key.push(key);
+    }
+    let (_, refine_position) = int_array(
+        take("refine_position")?,
+        "refine_position",
+        &[Some(3), Some(r)],
+    )
+    .map_err(&bad)?;
+    let (_, refine_normal) =
+        int_array(take("refine_normal")?, "refine_normal", &[Some(2), Some(r)]).map_err(&bad)?;
     let compact = CompactMsr {
         faces,
         vertices: triples(vertices),
@@ -563,6 +615,9 @@ fn read_compact(
         normals,
         normal_details,
         residuals,
+        refine_key,
+        refine_position: interleaved(&refine_position, 3, 1),
+        refine_normal: interleaved(&refine_normal, 2, 1),
         times,
         phi,
         phi_dims,
