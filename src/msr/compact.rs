@@ -216,7 +216,7 @@ fn mark_misread(
     let tol = (REFINE_TOLERANCE_VOXELS * h) as f32;
     let radius = REFINE_RADIUS_VOXELS * h;
     let mut marked = 0;
-    for k in 0..n {
+    for (k, refine_k) in refine.iter_mut().enumerate().take(n) {
         let data = decoded.level_data(k + 1);
         let phi = &reference.phis[k];
         let planes = TangentPlanes::new(
@@ -250,7 +250,7 @@ fn mark_misread(
         }
         let xk = msr.samples_at(k);
         for (s, p) in xk.iter().enumerate() {
-            if msr.born[s] as usize > k || refine[k][s] {
+            if msr.born[s] as usize > k || refine_k[s] {
                 continue;
             }
             let key = [0, 1, 2].map(|c| (p[c] / radius).floor() as i64);
@@ -264,7 +264,7 @@ fn mark_misread(
                 })
             });
             if hit {
-                refine[k][s] = true;
+                refine_k[s] = true;
                 marked += 1;
             }
         }
