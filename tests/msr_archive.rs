@@ -2,8 +2,9 @@
 //! bounds (samples of every level within half a lattice step per axis, input vertices exact,
 //! normals within a degree, φ_T within h/128 near the surface); NumPy's `np.load` (no pickling)
 //! reads every member and decodes samples, normals and φ_T with the documented formulas to the
-//! values the reader gives; an archive of the float64 layout of earlier builds reads back
-//! exactly; archives of another version, truncated, with members edited out of shape or range,
+//! values the reader gives (also the refined samples of a decomposition's archive); an archive
+//! of the float64 layout of earlier builds reads back exactly, one of the version-3 layout
+//! within its lattice; archives of another version, truncated, with members edited out of shape or range,
 //! or needing more memory decoded than allowed are refused with an error naming the file and
 //! the member. Also the vertex reconstruction X_k = X_N − Σ_{i>k} W_i (the input:
 //! X_0 less the snap) and the samples each level's level-set reconstruction reads (a sample
@@ -13,6 +14,7 @@ mod common;
 use common::*;
 use nalgebra::{Point3, Vector3};
 use rand::RngExt;
+use std::path::Path;
 use vesselmsr::grid::{Grid3, GridTransform};
 use vesselmsr::io::{read_npz, write_npz, NpyArray, NpyData};
 use vesselmsr::msr::archive::{read_msr, read_msr_within, write_msr, FORMAT_VERSION};
@@ -58,10 +60,17 @@ fn sample_msr() -> (Msr, Vec<Vec<Point3<f64>>>) {
         samples: xs[levels].clone(),
         details,
         normal_details,
+        // Zero before a sample's birth, as the decomposition leaves them (the archive stores none).
         normals: (0..=levels)
             .map(|i| {
                 (0..s)
-                    .map(|k| (xs[i][k] - Point3::origin()).normalize())
+                    .map(|k| {
+                        if k == 6 && i == 0 {
+                            Vector3::zeros()
+                        } else {
+                            (xs[i][k] - Point3::origin()).normalize()
+                        }
+                    })
                     .collect()
             })
             .collect(),
@@ -231,10 +240,10 @@ fn archive_round_trips_within_its_lattice_and_numpy_decodes_it() {
     }
     // Every level's samples within half a lattice step per axis (never adding up).
     for (k, x) in xs.iter().enumerate() {
-        for (a, b) in back.samples_at(k).iter().zip(x) {
+        for (j, (a, b)) in back.samples_at(k).iter().zip(x).enumerate() {
             assert!(
                 (a - b).amax() <= 0.5 * q * (1.0 + 1e-9),
-                "level {k}: {a} vs {b}"
+                "level {k}, sample {j}: {a} vs {b}"
             );
         }
     }
@@ -265,46 +274,13 @@ fn archive_round_trips_within_its_lattice_and_numpy_decodes_it() {
     assert!(near > 0 && far > 0, "near {near}, far {far}");
 
     // NumPy decodes the documented members with the documented formulas.
-    let script = r#"
-import json, sys
-import numpy as np
-z = np.load(sys.argv[1], allow_pickle=False)
-out = {k: {"shape": list(z[k].shape), "dtype": z[k].dtype.str} for k in z.files}
-out["version"] = int(z["format_version"])
-m = 127
-c = np.cumsum(z["normals"].astype(np.int64), 0).transpose(0, 2, 1) / m
-u, v = c[..., 0], c[..., 1]
-w = 1 - np.abs(u) - np.abs(v)
-sg = lambda x: np.where(x < 0, -1.0, 1.0)
-uu = np.where(w < 0, (1 - np.abs(v)) * sg(u), u)
-vv = np.where(w < 0, (1 - np.abs(u)) * sg(v), v)
-n = np.stack([uu, vv, w], -1)
-n /= np.linalg.norm(n, axis=-1, keepdims=True)
-N = n.shape[0] - 1
-q, qb = float(z["quantum"]), float(z["birth_quantum"])
-verts, faces = z["vertices"], z["faces"]
-pos = np.concatenate([verts, np.einsum("ek,ekd->ed", z["extra_bary"], verts[faces[z["extra_face"]]])])
-base = np.concatenate([pos + qb * z["snap"].T, z["phi_origin"] + qb * z["added_at"].T])
-res = z["residuals"].transpose(0, 2, 1)
-steps = np.zeros_like(base)
-for i in range(1, N + 1):
-    nn = n[i]
-    steps += res[i - 1] + np.rint(z["normal_details"][i - 1][:, None] * nn)
-xn = base + q * steps
-code = z["phi"].astype(np.float64)
-h, far = float(z["phi_voxel"]), float(z["phi_far"])
-phi = np.where(np.abs(code) <= 64, code * h / 64, np.sign(code) * (h + (np.abs(code) - 64) * far))
-out["x_n"] = xn.tolist()
-out["phi_values"] = phi.ravel().tolist()
-out["n0"] = n[0].tolist()
-print(json.dumps(out))
-"#;
-    let v = run_python(script, &[&path]);
+    let v = run_python(NUMPY_DECODER, &[&path]);
     let shape = |k: &str| v[k]["shape"].clone();
     assert_eq!(v["version"], FORMAT_VERSION);
     assert_eq!(shape("residuals"), serde_json::json!([3, 3, 7]));
     assert_eq!(shape("normals"), serde_json::json!([4, 2, 7]));
-    assert_eq!(shape("snap"), serde_json::json!([3, 6]));
+    assert_eq!(shape("snap_normal"), serde_json::json!([6]));
+    assert_eq!(shape("snap_residual"), serde_json::json!([3, 6]));
     assert_eq!(shape("added_at"), serde_json::json!([3, 1]));
     assert_eq!(shape("phi"), serde_json::json!([2, 3, 4]));
     assert_eq!(v["phi"]["dtype"], "|i1");
@@ -326,11 +302,13 @@ print(json.dumps(out))
     for (a, b) in floats("phi_values").iter().zip(back.phi.data()) {
         assert!((a - *b as f64).abs() < 1e-5, "{a} vs {b}");
     }
-    let n0: Vec<f64> = back.normals[0]
+    let normals: Vec<f64> = back
+        .normals
         .iter()
+        .flatten()
         .flat_map(|p| [p.x, p.y, p.z])
         .collect();
-    for (a, b) in floats("n0").iter().zip(&n0) {
+    for (a, b) in floats("normal_vectors").iter().zip(&normals) {
         assert!((a - b).abs() < 1e-12, "{a} vs {b}");
     }
 
@@ -338,7 +316,182 @@ print(json.dumps(out))
     let old = dir.path().join("v2.npz");
     write_v2(&old, &msr);
     assert_eq!(read_msr(&old).unwrap(), msr);
+    // One of the version-3 layout (written by the build before version 4, from this same
+    // representation) within its lattice and its normal codes.
+    let v3 =
+        read_msr(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/msr_v3.npz")).unwrap();
+    assert_eq!(
+        (&v3.faces, &v3.born, &v3.times),
+        (&msr.faces, &msr.born, &msr.times)
+    );
+    for (k, x) in xs.iter().enumerate() {
+        for (a, b) in v3.samples_at(k).iter().zip(x) {
+            assert!(
+                (a - b).amax() <= 0.5 * q * (1.0 + 1e-9),
+                "v3 level {k}: {a} vs {b}"
+            );
+        }
+    }
+    for i in 0..=msr.levels() {
+        for (a, b) in v3.normals[i].iter().zip(&msr.normals[i]) {
+            assert!(
+                a.angle(b).to_degrees() < 1.0 || b.norm() == 0.0,
+                "v3 level {i}"
+            );
+        }
+    }
 }
+
+/// A decomposition's archive has refined pairs (the writer checks the level-set rebuild from
+/// the codes): NumPy decodes them as the reader does.
+#[test]
+fn numpy_decodes_the_refined_samples_of_a_decomposition() {
+    use vesselmsr::grid::{grid_for_mesh, GridOptions};
+    use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
+    use vesselmsr::mesh::primitives::torus;
+    use vesselmsr::msr::decompose::{decompose, DecomposeOptions};
+    let mesh = torus(6.0, 2.0, 48, 16, Point3::origin());
+    let grid = GridOptions {
+        voxel: Some(0.5),
+        padding_voxels: 6,
+        ..Default::default()
+    };
+    let spec = grid_for_mesh(&mesh, &grid).unwrap();
+    let phi = voxelize(
+        &mesh,
+        spec.dims,
+        spec.transform,
+        &VoxelizeOptions::default(),
+    )
+    .unwrap();
+    let opts = DecomposeOptions {
+        levels: 3,
+        ..Default::default()
+    };
+    let msr = decompose(&mesh, phi, &opts, |_, _| {}).unwrap().msr;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("torus.msr.npz");
+    write_msr(&path, &msr).unwrap();
+    let back = read_msr(&path).unwrap();
+    let v = run_python(NUMPY_DECODER, &[&path]);
+    let refined = v["refined"].as_u64().unwrap();
+    assert!(refined > 0, "no refined pairs");
+    let flat = |k: &str| -> Vec<f64> {
+        let mut out = Vec::new();
+        let mut walk = vec![&v[k]];
+        while let Some(x) = walk.pop() {
+            match x {
+                serde_json::Value::Array(a) => walk.extend(a.iter().rev()),
+                x => out.push(x.as_f64().unwrap()),
+            }
+        }
+        out
+    };
+    let samples: Vec<f64> = back.samples.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+    let xn = flat("x_n");
+    assert_eq!(xn.len(), samples.len());
+    for (a, b) in xn.iter().zip(&samples) {
+        assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+    }
+    let normals: Vec<f64> = (back.normals.iter().flatten())
+        .flat_map(|p| [p.x, p.y, p.z])
+        .collect();
+    for (a, b) in flat("normal_vectors").iter().zip(&normals) {
+        assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+    }
+    println!("{refined} refined pairs of {} samples", msr.samples.len());
+}
+
+/// The NumPy decoder of the archive module doc: prints the members' shapes and dtypes, the
+/// version, X_N, n_0..n_N and φ_T as JSON.
+const NUMPY_DECODER: &str = r#"
+import json, sys
+import numpy as np
+z = np.load(sys.argv[1], allow_pickle=False)
+out = {k: {"shape": list(z[k].shape), "dtype": z[k].dtype.str} for k in z.files}
+out["version"] = int(z["format_version"])
+m = 127
+sg = lambda x: np.where(x < 0, -1.0, 1.0)
+def unit(c, m=m):
+    u, v = c[..., 0] / m, c[..., 1] / m
+    w = 1 - np.abs(u) - np.abs(v)
+    n = np.stack([np.where(w < 0, (1 - np.abs(v)) * sg(u), u), np.where(w < 0, (1 - np.abs(u)) * sg(v), v), w], -1)
+    n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+    return np.where((c == m + 1).all(-1)[..., None], 0.0, n)
+def code(d):
+    l1 = np.abs(d[:, 0]) + np.abs(d[:, 1]) + np.abs(d[:, 2])
+    x, y = d[:, 0] / l1, d[:, 1] / l1
+    u = np.where(d[:, 2] < 0, (1 - np.abs(y)) * sg(x), x)
+    v = np.where(d[:, 2] < 0, (1 - np.abs(x)) * sg(y), y)
+    return np.stack([np.rint(u * m), np.rint(v * m)], -1).astype(np.int64)
+q, qb, h = float(z["quantum"]), float(z["birth_quantum"]), float(z["phi_voxel"])
+o = z["phi_origin"]
+verts, faces = z["vertices"], z["faces"].astype(np.int64)
+ef = np.cumsum(z["extra_face_steps"].astype(np.int64))
+b = z["extra_bary"]
+f = faces[ef]
+pos = np.concatenate([verts, verts[f[:, 0]] * b[:, 0:1] + verts[f[:, 1]] * b[:, 1:2] + verts[f[:, 2]] * b[:, 2:3]])
+added = z["added_at"].T.astype(np.int64)
+born = z["born"].astype(np.int64)
+S, I, V, N = len(born), len(pos), len(verts), len(z["times"]) - 1
+# The refined (level, sample) pairs: a finer normal code and a position offset in steps of q/64.
+rk = np.cumsum(z["refine_key_steps"].astype(np.int64))
+rl, rs = rk // S, rk % S
+rp = z["refine_position"].T * (q / 64)
+rn = z["refine_normal"].T.astype(np.int64)
+# The order P: Morton code of each sample's voxel at birth, ties by index.
+cell = np.concatenate([np.floor((pos - o) / h), np.floor(added * qb / h)]).astype(np.int64)
+cell = np.clip(cell + 2**20, 0, 2**21 - 1)
+key = np.zeros(S, np.int64)
+for bit in range(21):
+    for a in range(3):
+        key |= ((cell[:, a] >> bit) & 1) << (3 * bit + a)
+P = np.argsort(key, kind="stable")
+def along(stored, pick):
+    idx = P[pick[P]]
+    out = np.zeros_like(stored)
+    out[idx] = np.cumsum(stored[idx], 0)
+    return out
+# Normals: births predicted along P (extras from their face's normal), then each level's change.
+a, bb, c = verts[f[:, 0]], verts[f[:, 1]], verts[f[:, 2]]
+cross = np.cross(bb - a, c - a) * float(z["face_normal_sign"])
+st = z["normals"].astype(np.int64).transpose(0, 2, 1)
+extra = np.zeros(S, bool)
+extra[V:I] = True
+codes = np.zeros((S, 2), np.int64)
+n = []
+for i in range(N + 1):
+    here = (born == i) & ~extra if i == 0 else born == i
+    new = along(st[i], here)
+    if i > 0:
+        codes = codes + along(st[i], born < i)
+    codes[here] = new[here]
+    if i == 0:
+        codes[V:I] = st[0][V:I] + code(cross)
+    ni = np.where((born > i)[:, None], 0.0, unit(codes))
+    j = (rl == i) & ~(codes[rs] == m + 1).all(-1)
+    ni[rs[j]] = unit(32 * codes[rs[j]] + rn[j], 32 * m)
+    n.append(ni)
+snap = (z["snap_normal"][:, None] * n[0][:I] + z["snap_residual"].T) * qb
+j = rl == born[rs]
+snap[rs[j & (rs < I)]] = snap[rs[j & (rs < I)]] + rp[j & (rs < I)]
+x = np.concatenate([pos + snap, o + added * qb])
+x[rs[j & (rs >= I)]] = x[rs[j & (rs >= I)]] + rp[j & (rs >= I)]
+for i in range(1, N + 1):
+    w = along(z["normal_details"][i - 1].astype(np.int64), born < i)
+    d = (w[:, None] * n[i] + z["residuals"][i - 1].T) * q
+    j = (rl == i) & (born[rs] < i)
+    d[rs[j]] = d[rs[j]] + rp[j]
+    x = x + np.where((born >= i)[:, None], 0.0, d)
+out["refined"] = int(len(rk))
+c = z["phi"].astype(np.float64)
+far = float(z["phi_far"])
+phi = np.where(np.abs(c) <= 64, c * h / 64, np.sign(c) * (h + (np.abs(c) - 64) * far))
+out["x_n"] = x.tolist()
+out["phi_values"] = phi.ravel().tolist()
+out["normal_vectors"] = np.array(n).tolist()
+print(json.dumps(out))
+"#;
 
 #[test]
 fn damaged_archives_are_refused() {
@@ -391,16 +544,34 @@ fn damaged_archives_are_refused() {
         (
             edited(
                 "born",
-                Some(NpyArray::new(&[7], NpyData::I64(vec![0, 0, 0, 0, 0, 0, 5]))),
+                Some(NpyArray::new(&[7], NpyData::I8(vec![0, 0, 0, 0, 0, 0, 5]))),
             ),
             "sample 6 at level 5",
         ),
         (
             edited(
-                "snap",
+                "snap_residual",
                 Some(NpyArray::new(&[3, 3], NpyData::I8(vec![0; 9]))),
             ),
-            "snap",
+            "snap_residual",
+        ),
+        (
+            edited(
+                "extra_face_steps",
+                Some(NpyArray::new(&[2], NpyData::I8(vec![1, 3]))),
+            ),
+            "face 4 is not within 0..4",
+        ),
+        (
+            edited("face_normal_sign", Some(NpyArray::scalar_i64(0))),
+            "face_normal_sign",
+        ),
+        (
+            edited(
+                "refine_key_steps",
+                Some(NpyArray::new(&[1], NpyData::I8(vec![100]))),
+            ),
+            "refine_key_steps",
         ),
         (
             edited(
