@@ -107,8 +107,9 @@ struct Filtered {
 }
 
 /// Shoulders of point `k` of (s, d): on each side, the widest point met going outward before
-/// the diameter falls 3% below it again or `reach` of arc is passed (the nearest of equal ones), None for a side cut short by the measured points while
-/// the diameter still rises towards their edge (both kept when both are so: the best there is).
+/// the diameter falls 3% below it again or `reach` of arc is passed (the nearest of equal
+/// ones); None for a side cut short by the measured points while the diameter still rises
+/// towards their edge (both kept when both are so: the best there is), so never both None.
 fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Option<usize>) {
     let side = |range: &mut dyn Iterator<Item = usize>, edge: usize| -> (usize, bool) {
         let mut best = k;
@@ -142,8 +143,8 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
     (lk.then_some(left), rk.then_some(right))
 }
 
-/// The references at point `k` of (s, d) from its shoulders (None when neither side has one).
-fn reference_at(s: &[f64], d: &[f64], k: usize, reach: f64) -> Option<Reference> {
+/// The references at point `k` of (s, d) from its shoulders.
+fn reference_at(s: &[f64], d: &[f64], k: usize, reach: f64) -> Reference {
     match shoulders(s, d, k, reach) {
         (Some(l), Some(r)) => {
             let local = if s[r] > s[l] {
@@ -151,16 +152,20 @@ fn reference_at(s: &[f64], d: &[f64], k: usize, reach: f64) -> Option<Reference>
             } else {
                 d[k]
             };
-            Some(Reference {
+            Reference {
                 local,
                 normal: d[l].min(d[r]),
-            })
+            }
         }
-        (Some(j), None) | (None, Some(j)) => Some(Reference {
+        (Some(j), None) | (None, Some(j)) => Reference {
             local: d[j],
             normal: d[j],
-        }),
-        (None, None) => None,
+        },
+        // Not returned by `shoulders`; the point is then its own reference.
+        (None, None) => Reference {
+            local: d[k],
+            normal: d[k],
+        },
     }
 }
 
@@ -226,17 +231,17 @@ pub fn find_stenoses(
         };
         fig.measured = idx.len();
         let reach = SHOULDER_REACH * median(d.clone());
-        let refs: Vec<Option<Reference>> = (0..d.len())
+        let refs: Vec<Reference> = (0..d.len())
             .map(|k| reference_at(&s, &d, k, reach))
             .collect();
         for (k, r) in refs.iter().enumerate() {
-            fig.reference[idx[k]] = *r;
+            fig.reference[idx[k]] = Some(*r);
         }
         // Narrowing against the normal reference (the narrower shoulder).
         let narrowing: Vec<f64> = refs
             .iter()
             .zip(&d)
-            .map(|(r, &di)| r.map_or(0.0, |r| (1.0 - di / r.normal).max(0.0)))
+            .map(|(r, &di)| (1.0 - di / r.normal).max(0.0))
             .collect();
         fig.max_narrowing_pct = narrowing.iter().cloned().fold(0.0, f64::max) * 100.0;
         figures.push(fig);
@@ -252,7 +257,7 @@ pub fn find_stenoses(
             if peak * 100.0 < opts.min_degree_pct || peak <= 0.0 {
                 break;
             }
-            let Some(r) = refs[k] else { break };
+            let r = refs[k];
             let (l, h) = shoulders(&s, &d, k, reach);
             let (lo, hi) = (l.unwrap_or(0), h.unwrap_or(d.len() - 1));
             for u in used.iter_mut().take(hi + 1).skip(lo) {
@@ -318,7 +323,7 @@ mod tests {
     #[test]
     fn shoulders_give_the_local_and_normal_references() {
         let (s, d) = profile(false);
-        let r = reference_at(&s, &d, 60, 24.0).unwrap();
+        let r = reference_at(&s, &d, 60, 24.0);
         let healthy = 6.0 - 0.02 * 30.0;
         assert!(
             (r.local - healthy).abs() < 0.02 * healthy,
@@ -327,7 +332,7 @@ mod tests {
         assert!(r.normal < r.local && r.normal > 0.93 * healthy, "{r:?}");
         assert!((d[60] / r.local - 0.5).abs() < 0.02);
         // A healthy point is its own reference on a taper.
-        let r = reference_at(&s, &d, 190, 24.0).unwrap();
+        let r = reference_at(&s, &d, 190, 24.0);
         assert!((1.0 - d[190] / r.normal).abs() < 0.01, "{r:?} {}", d[190]);
     }
 
@@ -348,7 +353,7 @@ mod tests {
             })
             .collect();
         let k = 56;
-        let r = reference_at(&s, &d, k, 24.0).unwrap();
+        let r = reference_at(&s, &d, k, 24.0);
         assert!((1.0 - d[k] / r.normal) < 0.06, "{r:?} {}", d[k]);
         assert!((1.0 - d[k] / r.local) > 0.15, "{r:?} {}", d[k]);
     }
@@ -363,7 +368,7 @@ mod tests {
         let (l, r) = shoulders(&s, &d, k, 24.0);
         assert_eq!(l, None);
         assert!(r.is_some());
-        let rf = reference_at(&s, &d, k, 24.0).unwrap();
+        let rf = reference_at(&s, &d, k, 24.0);
         assert!((d[k] / rf.local - 0.5).abs() < 0.05, "{rf:?}");
     }
 }

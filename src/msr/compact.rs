@@ -623,14 +623,7 @@ pub fn decode_msr(c: &CompactMsr) -> std::result::Result<Msr, String> {
              'added_at', 'normal_details', 'residuals')"
         ));
     }
-    let transform = GridTransform::new(Point3::from(c.phi_origin), h);
-    let values = c
-        .phi
-        .iter()
-        .map(|&code| decode_phi(code, h, c.phi_far))
-        .collect();
-    let phi = Grid3::from_data(c.phi_dims, transform, values)
-        .map_err(|e| format!("member 'phi': {e}"))?;
+    let phi = decode_phi_grid(&c.phi, c.phi_dims, c.phi_origin, h, c.phi_far)?;
     // w_i = W_i·n_i, as the decomposition defines it, from the decoded values.
     let normal_details = (1..=n)
         .map(|i| {
@@ -903,6 +896,19 @@ fn encode_phi(v: f64, h: f64, far: f64) -> i8 {
 }
 
 /// The φ value of a byte code.
+/// φ_T from its codes (both archive versions 3 and 4 store it alike).
+pub(crate) fn decode_phi_grid(
+    codes: &[i8],
+    dims: [usize; 3],
+    origin: [f64; 3],
+    h: f64,
+    far: f64,
+) -> Result<Grid3, String> {
+    let transform = GridTransform::new(Point3::from(origin), h);
+    let values = codes.iter().map(|&code| decode_phi(code, h, far)).collect();
+    Grid3::from_data(dims, transform, values).map_err(|e| format!("member 'phi': {e}"))
+}
+
 pub(crate) fn decode_phi(code: i8, h: f64, far: f64) -> f32 {
     let a = (code as f64).abs();
     let v = if a <= PHI_NEAR_STEPS {

@@ -7,9 +7,8 @@
 //! W_i/q − rint(w·n̂_i); normals as octahedral codes, each level less the level before (a zero
 //! normal is the code (128, 128)); φ_T as in version 4.
 
-use super::compact::{decode_normal, decode_phi, input_positions, NORMAL_STEPS, ZERO_CODE};
+use super::compact::{decode_normal, decode_phi_grid, input_positions, NORMAL_STEPS, ZERO_CODE};
 use super::{Msr, MsrParams};
-use crate::grid::{Grid3, GridTransform};
 use nalgebra::{Point3, Vector3};
 
 /// An [`Msr`] as its version-3 archive holds it (see the module doc; flat arrays in C order).
@@ -68,14 +67,7 @@ pub fn decode_msr(c: &CompactMsrV3) -> std::result::Result<Msr, String> {
         })
         .collect();
     let h = c.phi_voxel;
-    let transform = GridTransform::new(Point3::from(c.phi_origin), h);
-    let values = c
-        .phi
-        .iter()
-        .map(|&code| decode_phi(code, h, c.phi_far))
-        .collect();
-    let phi = Grid3::from_data(c.phi_dims, transform, values)
-        .map_err(|e| format!("member 'phi': {e}"))?;
+    let phi = decode_phi_grid(&c.phi, c.phi_dims, c.phi_origin, h, c.phi_far)?;
     let mut normals = Vec::with_capacity(n + 1);
     let mut code = vec![[0i64; 2]; s];
     for i in 0..=n {
