@@ -284,17 +284,7 @@ fn archive_round_trips_within_its_lattice_and_numpy_decodes_it() {
     assert_eq!(shape("added_at"), serde_json::json!([3, 1]));
     assert_eq!(shape("phi"), serde_json::json!([2, 3, 4]));
     assert_eq!(v["phi"]["dtype"], "|i1");
-    let floats = |k: &str| -> Vec<f64> {
-        let mut out = Vec::new();
-        let mut walk = vec![&v[k]];
-        while let Some(x) = walk.pop() {
-            match x {
-                serde_json::Value::Array(a) => walk.extend(a.iter().rev()),
-                x => out.push(x.as_f64().unwrap()),
-            }
-        }
-        out
-    };
+    let floats = |k: &str| flatten_numbers(&v[k]);
     let samples: Vec<f64> = back.samples.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
     for (a, b) in floats("x_n").iter().zip(&samples) {
         assert!((a - b).abs() < 1e-9, "{a} vs {b}");
@@ -376,17 +366,7 @@ fn numpy_decodes_the_refined_samples_of_a_decomposition() {
     let v = run_python(NUMPY_DECODER, &[&path]);
     let refined = v["refined"].as_u64().unwrap();
     assert!(refined > 0, "no refined pairs");
-    let flat = |k: &str| -> Vec<f64> {
-        let mut out = Vec::new();
-        let mut walk = vec![&v[k]];
-        while let Some(x) = walk.pop() {
-            match x {
-                serde_json::Value::Array(a) => walk.extend(a.iter().rev()),
-                x => out.push(x.as_f64().unwrap()),
-            }
-        }
-        out
-    };
+    let flat = |k: &str| flatten_numbers(&v[k]);
     let samples: Vec<f64> = back.samples.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
     let xn = flat("x_n");
     assert_eq!(xn.len(), samples.len());
@@ -621,4 +601,17 @@ fn damaged_archives_are_refused() {
     }
     std::fs::write(&path, b"not a zip at all").unwrap();
     assert!(read_msr(&path).unwrap_err().to_string().contains("zip"));
+}
+
+/// The numbers of a nested JSON array, in row-major order.
+fn flatten_numbers(v: &serde_json::Value) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut walk = vec![v];
+    while let Some(x) = walk.pop() {
+        match x {
+            serde_json::Value::Array(a) => walk.extend(a.iter().rev()),
+            x => out.push(x.as_f64().unwrap()),
+        }
+    }
+    out
 }
