@@ -149,6 +149,11 @@ fn cotan_neighbours(pts: &[[f64; 2]], faces: &[[usize; 3]]) -> Vec<Vec<(usize, f
         nb[a].push((b, x));
         nb[b].push((a, x));
     }
+    // In neighbour order, not the map's (random per run): the solve's sums are then the same
+    // bits every time.
+    for list in &mut nb {
+        list.sort_by_key(|&(v, _)| v);
+    }
     nb
 }
 
