@@ -4,8 +4,8 @@
 //! measured along the centreline, so that it does not depend on how large the region was drawn.
 //!
 //! The healthy diameters are the references of `stenosis` at the branch point nearest the point:
-//! the *local* one (the line between the widest lumen within reach on either side, read there)
-//! and the *normal* one (the narrower of those two shoulders). Inside a ball D the measured input
+//! the *local* one (the line between the healthy lumen on either side, the shoulders, read
+//! there) and the *normal* one (the narrower of those two shoulders). Inside a ball D the measured input
 //! section along the centreline narrowest against its local reference gives the minimum diameter
 //! D_min; the diameter stenosis is 1 − D_min/D_ref and the area stenosis 1 − A_min/(π D_ref²/4)
 //! with D_ref the local reference there (ECST's estimate of the original lumen), and the NASCET
