@@ -545,10 +545,10 @@ fn hermite(a: &Anchor, b: &Anchor, spacing: f64) -> Vec<Point3<f64>> {
 
 /// The curve between two anchors of one run through E where the lumen in D is intact (a
 /// narrowing): the cubic Hermite curve, unless the vessel bends inside D more than one cubic
-/// can follow — the input's own centreline between
-/// the anchors strays from it by more than [`FOLLOW_RADII`] of the anchors' radius (a long region
-/// along a winding vessel, several narrowings merged) — in which case that centreline is
-/// followed, smoothed over about one radius of arc (its ends, the anchors, kept).
+/// can follow — the input's own centreline between the anchors strays from it by more than
+/// [`FOLLOW_RADII`] of the anchors' radius (a long region along a winding vessel, several
+/// narrowings merged) — in which case that centreline is followed, smoothed over about one
+/// radius of arc (its ends, the anchors, kept).
 fn follow_or_bridge(
     centerline: &Centerline,
     a: &Anchor,
