@@ -7,8 +7,9 @@
 //! inside D (the chop ball × 1.3): watertight, outward, every face near D two-sided (no slit,
 //! fin or pocket), stitched, positive volumes in the report, and the distance to the truth.
 //!
-//! Measured 2026-12-04: open aorta 3.22h / +8.6% in D; capped (inward) aorta 1.75h / −2.8%.
-//! Issue 21 asks for 1.5h; the bounds below are what the centreline fill gives today (not met).
+//! Measured 2026-12-04: open aorta 2.52h / +4.0% in D (3.22h / +8.6% before the intact wall
+//! around a hole was kept and read, `known_wall`); capped (inward) aorta 1.39h / −2.9% (was
+//! 1.75h). Issue 21 asks for 1.5h: met on the capped aorta, not on the open one.
 
 mod common;
 
@@ -128,9 +129,9 @@ fn a_hole_in_the_open_aorta_is_filled_without_a_slit() {
         6.647,
         dir.path(),
     );
-    // Issue 21 asks for 1.5h (not met: 3.22h measured); the damaged input is 21.6h / −12.5%.
-    assert!(hd <= 4.0, "{hd}h");
-    assert!(ve.abs() <= 0.10, "{ve}");
+    // Issue 21 asks for 1.5h (not met: 2.52h measured); the damaged input is 21.6h / −12.5%.
+    assert!(hd <= 3.0, "{hd}h");
+    assert!(ve.abs() <= 0.06, "{ve}");
 }
 
 #[test]
@@ -149,8 +150,8 @@ fn the_inward_capped_aorta_is_repaired_outward() {
     );
     let notices = report["notices"].to_string();
     assert!(notices.contains("faced inward"), "{notices}");
-    // Issue 21 asks for 1.5h (not met: 1.75h measured); the damaged input is 20.2h / −11.9%.
-    assert!(hd <= 2.5, "{hd}h");
+    // Issue 21 asks for 1.5h (1.39h measured); the damaged input is 20.2h / −11.9%.
+    assert!(hd <= 1.5, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
 }
 

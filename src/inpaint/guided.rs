@@ -35,7 +35,12 @@
 //!    details: at each curve sample and angle, the ray meets the input's wall outside D at some
 //!    offset from that section; these offsets are interpolated along the curve per angle across
 //!    D (issue 21's "details carried across D"; faded out towards a junction point, and not read
-//!    within a junction's flare, whose wall is no single vessel's).
+//!    within a junction's flare, whose wall is no single vessel's). Around a hole (a group of
+//!    balls holding a cap's rim, [`HoleCaps`]), an anchored tube also reads the wall inside D
+//!    wherever its ray meets the input's own triangles rather than the cap: that wall is
+//!    intact. The offsets are then relaxed to the harmonic interpolation of the readings on the
+//!    tube's wall chart (arc length × arc of the section), so the missing part of a section
+//!    takes its shape from the wall beside it around the vessel as well as along it.
 //! 4. **Field.** At a node x of D, each tube gives |x − c|⊥ − ρ(θ) from its nearest curve sample
 //!    c (the offset projected on the section plane there; past an open anchor end the tube
 //!    continues straight, past a capped end it closes as a ball), and the fill is the smallest
@@ -53,6 +58,17 @@ use crate::grid::Grid3;
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 use std::f64::consts::TAU;
+use std::ops::Range;
+
+/// The cap triangles of the closed input (`cap_holes`) and which balls of D hold a hole's rim:
+/// inside those, the wall that is not cap is intact (`known_wall`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HoleCaps {
+    /// Face range of the cap triangles in the mesh the sections are read on.
+    pub faces: Range<usize>,
+    /// Per ball: whether a hole's rim lies in it (missing entries: no).
+    pub in_ball: Vec<bool>,
+}
 
 /// Options of [`plan_guides`]. Lengths in voxels where the field says so.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -201,6 +217,7 @@ pub fn plan_guides(
     centerline: &Centerline,
     balls: &[Ball],
     intact: &[bool],
+    holes: &HoleCaps,
     h: f64,
     opts: &GuideOptions,
 ) -> Vec<RegionGuide> {
@@ -210,7 +227,8 @@ pub fn plan_guides(
         let follow = group
             .iter()
             .all(|&i| intact.get(i).copied().unwrap_or(false));
-        if let Some((tubes, kinds)) = plan_group(mesh_bvh, centerline, &gb, follow, h, opts) {
+        let cap = (!follow && group.iter().any(|&i| holes.in_ball.get(i).copied().unwrap_or(false))).then(|| holes.faces.clone());
+        if let Some((tubes, kinds)) = plan_group(mesh_bvh, centerline, &gb, follow, cap, h, opts) {
             let fillet = 0.25
                 * tubes
                     .iter()
@@ -232,6 +250,7 @@ fn plan_group(
     centerline: &Centerline,
     balls: &[Ball],
     follow: bool,
+    cap: Option<Range<usize>>,
     h: f64,
     opts: &GuideOptions,
 ) -> Option<(Vec<GuideTube>, Vec<GuideKind>)> {
@@ -400,6 +419,7 @@ fn plan_group(
         rays: opts.rays.max(8),
         balls,
         grow,
+        cap,
     };
     let bridge = |a: &Anchor, b: &Anchor| {
         let pts = if follow {
@@ -689,6 +709,9 @@ struct Sections<'a> {
     /// outside them only.
     balls: &'a [Ball],
     grow: f64,
+    /// In a group of balls around a hole: the cap triangles `cap_holes` added (face indices of
+    /// the BVH's mesh). The rest of the wall inside D is then intact and read too (`known_wall`).
+    cap: Option<Range<usize>>,
 }
 
 impl Sections<'_> {
@@ -790,6 +813,17 @@ impl Sections<'_> {
                 .iter()
                 .all(|b| (p - b.center).norm() >= b.radius + self.grow)
         };
+        // Through a hole's ball, an anchored tube also reads the intact wall inside D (every
+        // face but the cap's).
+        let known_inside = open_end && self.cap.is_some();
+        let known_wall = |p: &Point3<f64>, face: u32| {
+            outside_e(p)
+                || (known_inside
+                    && self
+                        .cap
+                        .as_ref()
+                        .is_some_and(|cap| !cap.contains(&(face as usize))))
+        };
         let read: Vec<Option<f64>> = (0..points.len())
             .into_par_iter()
             .flat_map_iter(|i| {
@@ -798,6 +832,7 @@ impl Sections<'_> {
                 // Towards a junction point, sections outside E only: from inside, a ray that
                 // leaves E crosses into whatever lies beyond D (another branch).
                 let outside = open_end || outside_e(c);
+                let known_wall = &known_wall;
                 (0..m).map(move |j| {
                     if !outside {
                         return None;
@@ -814,7 +849,7 @@ impl Sections<'_> {
                     let wall = c + d * hit.t;
                     (hit.t > 0.0
                         && (hit.t - rho).abs() < 0.5 * rho
-                        && outside_e(&wall)
+                        && known_wall(&wall, hit.face)
                         && branch.is_none_or(|b| self.on_branch(&wall, b, rho)))
                     .then_some(hit.t - rho)
                 })
@@ -848,6 +883,13 @@ impl Sections<'_> {
                     at(lo) * (1.0 - w) + at(hi) * w
                 };
             }
+        }
+        if known_inside {
+            let known: Vec<bool> = read.iter().map(|r| r.is_some()).collect();
+            let spacing: Vec<f64> = (0..n)
+                .map(|i| TAU / m as f64 * (0..m).map(|j| base(i, j)).sum::<f64>() / m as f64)
+                .collect();
+            relax_harmonic(&mut detail, &known, arc, &spacing, m);
         }
         detail
     }
@@ -1034,6 +1076,54 @@ pub fn fill_guided(phi: &mut Grid3, balls: &[Ball], guides: &[RegionGuide]) -> u
         .sum()
 }
 
+/// Relaxes the unknown cells of `values` (sample-major, `m` angles per sample, periodic in angle)
+/// to the harmonic interpolation of the known ones: Laplace's equation on the tube's wall chart,
+/// arc length `arc` along it and `spacing[i]` (world units) between neighbouring angles at
+/// sample i; the first and last samples mirror their neighbour (no flux). Successive
+/// over-relaxation from the given values, until no cell moves by more than 1e-5 of the mean
+/// spacing (at most [`HARMONIC_SWEEPS`] sweeps).
+fn relax_harmonic(values: &mut [f64], known: &[bool], arc: &[f64], spacing: &[f64], m: usize) {
+    let n = arc.len();
+    if n < 2 || known.iter().all(|&k| k) || !known.iter().any(|&k| k) {
+        return;
+    }
+    let tol = 1e-5 * spacing.iter().sum::<f64>() / n as f64;
+    let omega = 1.8;
+    for _ in 0..HARMONIC_SWEEPS {
+        let mut moved: f64 = 0.0;
+        for i in 0..n {
+            let back = (i > 0).then(|| 1.0 / (arc[i] - arc[i - 1]).max(1e-12).powi(2));
+            let fwd = (i + 1 < n).then(|| 1.0 / (arc[i + 1] - arc[i]).max(1e-12).powi(2));
+            let around = 1.0 / spacing[i].max(1e-12).powi(2);
+            for j in 0..m {
+                let c = i * m + j;
+                if known[c] {
+                    continue;
+                }
+                let mut sum = around * (values[i * m + (j + m - 1) % m] + values[i * m + (j + 1) % m]);
+                let mut weight = 2.0 * around;
+                if let Some(w) = back {
+                    sum += w * values[c - m];
+                    weight += w;
+                }
+                if let Some(w) = fwd {
+                    sum += w * values[c + m];
+                    weight += w;
+                }
+                let new = values[c] + omega * (sum / weight - values[c]);
+                moved = moved.max((new - values[c]).abs());
+                values[c] = new;
+            }
+        }
+        if moved < tol {
+            break;
+        }
+    }
+}
+
+/// Most sweeps of [`relax_harmonic`].
+const HARMONIC_SWEEPS: usize = 4000;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1086,6 +1176,38 @@ mod tests {
     }
 
     #[test]
+    fn the_harmonic_fill_of_a_hole_in_a_linear_chart_is_that_plane() {
+        // u(s, θ) = 2s + 3 on the known cells (harmonic: the Laplacian of a linear function is
+        // 0); a hole of 20 samples × 12 angles starts at 0 and must relax to it.
+        let (n, m) = (60, 24);
+        let arc: Vec<f64> = (0..n).map(|i| 0.1 * i as f64).collect();
+        let spacing = vec![0.3; n];
+        let truth = |i: usize| 2.0 * arc[i] + 3.0;
+        let mut known = vec![true; n * m];
+        let mut u: Vec<f64> = (0..n * m).map(|c| truth(c / m)).collect();
+        for i in 20..40 {
+            for j in 5..17 {
+                known[i * m + j] = false;
+                u[i * m + j] = 0.0;
+            }
+        }
+        relax_harmonic(&mut u, &known, &arc, &spacing, m);
+        let worst = (0..n * m)
+            .map(|c| (u[c] - truth(c / m)).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-3, "worst {worst}");
+        // A hole on the first rows has no value below it: it takes the known rows' (no flux).
+        let mut known = vec![true; n * m];
+        let mut u = vec![1.0; n * m];
+        for c in 0..5 * m {
+            known[c] = false;
+            u[c] = -4.0;
+        }
+        relax_harmonic(&mut u, &known, &arc, &spacing, m);
+        assert!(u.iter().all(|v| (v - 1.0).abs() < 1e-3));
+    }
+
+    #[test]
     fn ball_groups_join_overlapping_balls() {
         let b = |x: f64| Ball {
             center: Point3::new(x, 0.0, 0.0),
@@ -1095,3 +1217,4 @@ mod tests {
         assert_eq!(g, vec![vec![0, 2], vec![1, 3]]);
     }
 }
+

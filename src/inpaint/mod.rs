@@ -10,6 +10,7 @@ pub mod guided;
 pub mod harmonic;
 pub mod holes;
 pub mod junction;
+pub mod known_wall;
 pub mod mask;
 pub mod msr_fill;
 pub mod paper;

@@ -11,7 +11,8 @@
 //!    nearest crossing exactly and in a fixed number of passes).
 //! 3. Fill D by one of the methods ([`InpaintMethod`]), unite it with the input (min(ψ, φ_0):
 //!    the damage is missing volume, so nothing the input has is taken away), blend the result
-//!    into φ_0 over a band inside ∂D (no seam), remove pieces that float in D or voids sealed in
+//!    into φ_0 over a band inside ∂D (no seam) and, in a ball around a hole, over the intact
+//!    wall beside the hole (`known_wall`: only the hole's cap is unknown there), remove pieces that float in D or voids sealed in
 //!    it (`topology`), redistance near the surface (not after the axial fill, whose values are
 //!    distances already).
 //! 4. Mesh: marching cubes of the filled φ; with `keep_outside`, stitch the part deep in D into the
@@ -24,8 +25,9 @@
 use super::axial::fill_axial;
 use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::checks::RepairChecks;
-use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions};
+use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions, HoleCaps};
 use super::junction::{fill_junction, Branch};
+use super::known_wall::{hole_rims, keep_known_wall, rim_balls};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{fill_msr, MsrFillOptions};
 use super::paper::{fill_paper, PaperOptions, DT_VOXELS2};
@@ -282,11 +284,13 @@ pub fn repair_with_centerline(
     // faces its result outward, or here), so that the patch, the stitch and every volume of the
     // report agree.
     let mut flipped = false;
+    let mut cap_faces = 0..0;
     let mut closed_input = if opts.open_ends || EdgeMap::new(mesh).boundary_edges() == 0 {
         mesh.clone()
     } else {
         let (capped, report) = cap_holes(mesh, &CapOptions::default())?;
         flipped = report.flipped;
+        cap_faces = report.cap_faces;
         capped
     };
     let mut notices = Vec::new();
@@ -383,7 +387,7 @@ pub fn repair_with_centerline(
         steps: opts.steps.max(1),
         harmonic: Default::default(),
     };
-    let weights = blend_weights(&depth, opts.blend_voxels * h);
+    let mut weights = blend_weights(&depth, opts.blend_voxels * h);
     let mut axes = Vec::new();
     let mut junctions = 0;
     let mut guides = Vec::new();
@@ -415,12 +419,18 @@ pub fn repair_with_centerline(
                 },
             };
             let bvh = MeshBvh::new(&closed_input);
+            let rim = hole_rims(&closed_input, cap_faces.clone(), balls);
+            let holes = HoleCaps {
+                faces: cap_faces.clone(),
+                in_ball: rim_balls(&rim, balls),
+            };
             let plans = centerline.map_or_else(Vec::new, |c| {
                 plan_guides(
                     &bvh,
                     c,
                     balls,
                     &opts.intact_lumen,
+                    &holes,
                     h,
                     &GuideOptions::default(),
                 )
@@ -493,6 +503,8 @@ pub fn repair_with_centerline(
             psi
         }
     };
+    // The intact wall around a hole is known: the fill acts in the hole's shadow only.
+    keep_known_wall(&closed_input, cap_faces, balls, &phi0, &psi, &mut weights, h);
     // The fill is united with the input: the damage a repair is for (a chopped wall, a
     // narrowing, an occlusion) is missing volume, so what the input has in D is kept.
     psi.data_mut()

@@ -1,0 +1,210 @@
+//! The intact wall inside D is known: where D was drawn around a hole, the fill acts only in
+//! the hole's shadow (paper Algorithm 4 copies φ_0 wherever the data are known; D is only the
+//! region that holds the unknown part).
+//!
+//! A hole's ball (`holes`) is wider than the hole, so it also holds intact wall around the hole.
+//! The fill of D (a tube along the centreline, a flow) matches that wall only roughly, and its
+//! union with the input would push that wall out wherever the fill is wider: on real vessels the
+//! largest errors of a chop's repair lay there, several voxels out on wall the input had right.
+//! So at a node of such a ball where the fill adds volume, the nearest point q of the input's own
+//! triangles (the cap triangles `cap_holes` added left out) is found: a node on the outer side of
+//! the wall at q, with q farther than [`RIM_REACH_VOXELS`] from the hole's rim (the cap's
+//! boundary), lies over intact wall, and the fill's weight there is 0; it rises by a cubic
+//! smoothstep to its full value at the rim. Nodes over the hole (whose nearest wall is the rim)
+//! and nodes behind the wall (in the lumen) keep the full weight. Balls with no cap triangle in
+//! them (a narrowing, an occlusion given as a region of a closed mesh) keep the full weight:
+//! their wall is the damage.
+
+use super::region::Ball;
+use crate::bvh::MeshBvh;
+use crate::grid::Grid3;
+use crate::TriMesh;
+use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::ops::Range;
+
+/// Distance from the rim over which the fill's weight falls to 0 on the intact wall, voxels.
+pub const RIM_REACH_VOXELS: f64 = 3.0;
+
+/// Lowers `weights` (the fill's blend weight per node of `phi0`'s grid) over the intact wall of
+/// D's hole balls (see the module docs), at the nodes where the fill `psi` lies below the input
+/// `phi0`. `closed` is the capped input and `cap_faces` its cap triangles; `h` the voxel (world
+/// units). Returns the number of nodes whose weight was lowered.
+pub fn keep_known_wall(
+    closed: &TriMesh,
+    cap_faces: Range<usize>,
+    balls: &[Ball],
+    phi0: &Grid3,
+    psi: &Grid3,
+    weights: &mut [f32],
+    h: f64,
+) -> usize {
+    let rim = hole_rims(closed, cap_faces.clone(), balls);
+    if rim.is_empty() {
+        return 0;
+    }
+    let hole_ball = rim_balls(&rim, balls);
+    let wall: Vec<[u32; 3]> = closed
+        .faces
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !cap_faces.contains(i))
+        .map(|(_, f)| *f)
+        .collect();
+    let wall = TriMesh::new(closed.vertices.clone(), wall);
+    let wall_bvh = MeshBvh::new(&wall);
+    let reach = RIM_REACH_VOXELS * h;
+    let [nx, ny, _] = phi0.dims();
+    let t = *phi0.transform();
+    weights
+        .par_chunks_mut(nx * ny)
+        .zip(phi0.data().par_chunks(nx * ny))
+        .zip(psi.data().par_chunks(nx * ny))
+        .enumerate()
+        .map(|(k, ((w, known), fill))| {
+            let mut n = 0;
+            for (i, w) in w.iter_mut().enumerate() {
+                if *w <= 0.0 || fill[i] >= known[i] {
+                    continue;
+                }
+                let p = t.index_to_world(Vector3::new((i % nx) as f64, (i / nx) as f64, k as f64));
+                // Only in hole balls: a node also in a ball without a cap keeps its weight.
+                let mut in_hole = false;
+                let mut in_other = false;
+                for (b, &hole) in balls.iter().zip(&hole_ball) {
+                    if b.contains(&p) {
+                        in_hole |= hole;
+                        in_other |= !hole;
+                    }
+                }
+                if !in_hole || in_other {
+                    continue;
+                }
+                let q = wall_bvh.closest_point(&p);
+                if !q.is_found() {
+                    continue;
+                }
+                // Behind the wall (in the lumen): the fill adds nothing the input has wrong.
+                if (p - q.point).dot(&wall.face_normal_raw(q.face as usize)) <= 0.0 {
+                    continue;
+                }
+                let r = rim
+                    .iter()
+                    .map(|(a, b)| distance_to_segment(&q.point, a, b))
+                    .fold(f64::INFINITY, f64::min);
+                let s = (1.0 - r / reach).clamp(0.0, 1.0) as f32;
+                let keep = s * s * (3.0 - 2.0 * s);
+                if keep < 1.0 {
+                    *w *= keep;
+                    n += 1;
+                }
+            }
+            n
+        })
+        .sum()
+}
+
+/// Per ball: whether a segment of `rim` has an end in it.
+pub fn rim_balls(rim: &[(Point3<f64>, Point3<f64>)], balls: &[Ball]) -> Vec<bool> {
+    balls
+        .iter()
+        .map(|ball| rim.iter().any(|(a, b)| ball.contains(a) || ball.contains(b)))
+        .collect()
+}
+
+/// The rims of the holes in `balls`: the edges that bound the cap triangles (used once by them),
+/// with an end inside a ball, as segments.
+pub fn hole_rims(
+    closed: &TriMesh,
+    cap_faces: Range<usize>,
+    balls: &[Ball],
+) -> Vec<(Point3<f64>, Point3<f64>)> {
+    let mut uses: HashMap<(u32, u32), usize> = HashMap::new();
+    for f in &closed.faces[cap_faces] {
+        for e in 0..3 {
+            let (a, b) = (f[e], f[(e + 1) % 3]);
+            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let mut rim: Vec<(u32, u32)> = uses
+        .into_iter()
+        .filter(|&(_, n)| n == 1)
+        .map(|(e, _)| e)
+        .collect();
+    // Hash order is random; the sum over segments is a minimum, but keep the output fixed.
+    rim.sort_unstable();
+    rim.into_iter()
+        .map(|(a, b)| (closed.vertices[a as usize], closed.vertices[b as usize]))
+        .filter(|(a, b)| balls.iter().any(|ball| ball.contains(a) || ball.contains(b)))
+        .collect()
+}
+
+/// Distance from `p` to the segment from `a` to `b`.
+fn distance_to_segment(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
+    let ab = b - a;
+    let len2 = ab.norm_squared();
+    let s = if len2 > 0.0 {
+        ((p - a).dot(&ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + ab * s)).norm()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::GridTransform;
+    use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
+    use crate::mesh::cap::{cap_holes, CapOptions};
+    use crate::mesh::primitives::open_tube;
+
+    #[test]
+    fn the_fill_is_kept_over_the_hole_and_dropped_over_the_intact_wall() {
+        // A tube of radius 5 along z with a hole chopped in its wall at x = 5, capped; D a ball
+        // of radius 8 around the hole; a fill 2 units wider than the input everywhere.
+        let tube = open_tube(5.0, 40.0, 96, 121);
+        let chop = Ball {
+            center: Point3::new(5.0, 0.0, 20.0),
+            radius: 3.0,
+        };
+        let faces = tube
+            .faces
+            .iter()
+            .filter(|f| !f.iter().any(|&v| chop.contains(&tube.vertices[v as usize])))
+            .copied()
+            .collect();
+        let (closed, report) =
+            cap_holes(&TriMesh::new(tube.vertices.clone(), faces), &CapOptions::default()).unwrap();
+        let d = [Ball {
+            center: chop.center,
+            radius: 8.0,
+        }];
+        let h = 0.5;
+        let t = GridTransform::new(Point3::new(-3.0, -8.0, 12.0), h);
+        let phi0 = voxelize(&closed, [33, 33, 33], t, &VoxelizeOptions::default()).unwrap();
+        let mut psi = phi0.clone();
+        psi.data_mut().iter_mut().for_each(|v| *v -= 2.0);
+        let mut w = vec![1.0f32; phi0.data().len()];
+        let lowered = keep_known_wall(&closed, report.cap_faces.clone(), &d, &phi0, &psi, &mut w, h);
+        assert!(lowered > 0);
+        let at = |x: f64, y: f64, z: f64| {
+            let i = ((x + 3.0) / h).round() as usize;
+            let j = ((y + 8.0) / h).round() as usize;
+            let k = ((z - 12.0) / h).round() as usize;
+            w[i + 33 * (j + 33 * k)]
+        };
+        // Over the hole, between the cap and where the wall was: the fill acts in full.
+        assert_eq!(at(4.5, 0.0, 20.0), 1.0);
+        // Just outside the intact wall, a quarter turn from the hole: the input is kept.
+        assert_eq!(at(0.0, 5.5, 20.0), 0.0);
+        assert_eq!(at(5.5, 0.0, 26.0), 0.0);
+        // In the lumen (behind the wall) nothing is lowered.
+        assert_eq!(at(0.0, 3.0, 20.0), 1.0);
+        // Without a cap in D (a narrowing of a closed mesh) nothing changes.
+        let mut w2 = vec![1.0f32; phi0.data().len()];
+        assert_eq!(keep_known_wall(&closed, 0..0, &d, &phi0, &psi, &mut w2, h), 0);
+        assert!(w2.iter().all(|&v| v == 1.0));
+    }
+}
