@@ -36,11 +36,13 @@
 //!    offset from that section; these offsets are interpolated along the curve per angle across
 //!    D (issue 21's "details carried across D"; faded out towards a junction point, and not read
 //!    within a junction's flare, whose wall is no single vessel's). Around a hole (a group of
-//!    balls holding a cap's rim, [`HoleCaps`]), an anchored tube also reads the wall inside D
-//!    wherever its ray meets the input's own triangles rather than the cap: that wall is
-//!    intact. The offsets are then relaxed to the harmonic interpolation of the readings on the
-//!    tube's wall chart (arc length × arc of the section), so the missing part of a section
-//!    takes its shape from the wall beside it around the vessel as well as along it.
+//!    balls holding a cap's rim, [`HoleCaps`]), every tube also reads the wall inside D wherever
+//!    its ray meets the input's own triangles rather than the cap: that wall is intact. The
+//!    offsets are then relaxed to the harmonic interpolation of the readings on the tube's wall
+//!    chart (arc length × arc of the section), so the missing part of a section takes its shape
+//!    from the wall beside it around the vessel as well as along it. Through a narrowing (an
+//!    intact lumen, `--stenoses`), a section whose rays all meet the narrowed wall takes that
+//!    wall's own shape, scaled about its centroid to the interpolated size.
 //! 4. **Field.** At a node x of D, each tube gives |x − c|⊥ − ρ(θ) from its nearest curve sample
 //!    c (the offset projected on the section plane there; past an open anchor end the tube
 //!    continues straight, past a capped end it closes as a ball), and the fill is the smallest
@@ -227,7 +229,11 @@ pub fn plan_guides(
         let follow = group
             .iter()
             .all(|&i| intact.get(i).copied().unwrap_or(false));
-        let cap = (!follow && group.iter().any(|&i| holes.in_ball.get(i).copied().unwrap_or(false))).then(|| holes.faces.clone());
+        let cap = (!follow
+            && group
+                .iter()
+                .any(|&i| holes.in_ball.get(i).copied().unwrap_or(false)))
+        .then(|| holes.faces.clone());
         if let Some((tubes, kinds)) = plan_group(mesh_bvh, centerline, &gb, follow, cap, h, opts) {
             let fillet = 0.25
                 * tubes
@@ -420,6 +426,7 @@ fn plan_group(
         balls,
         grow,
         cap,
+        narrowed: follow,
     };
     let bridge = |a: &Anchor, b: &Anchor| {
         let pts = if follow {
@@ -712,6 +719,9 @@ struct Sections<'a> {
     /// In a group of balls around a hole: the cap triangles `cap_holes` added (face indices of
     /// the BVH's mesh). The rest of the wall inside D is then intact and read too (`known_wall`).
     cap: Option<Range<usize>>,
+    /// The group's lumen is intact, only narrowed (`--stenoses`): inside D an anchored tube's
+    /// sections keep the narrowed wall's own shape, widened to the interpolated size.
+    narrowed: bool,
 }
 
 impl Sections<'_> {
@@ -813,9 +823,9 @@ impl Sections<'_> {
                 .iter()
                 .all(|b| (p - b.center).norm() >= b.radius + self.grow)
         };
-        // Through a hole's ball, an anchored tube also reads the intact wall inside D (every
-        // face but the cap's).
-        let known_inside = open_end && self.cap.is_some();
+        // Through a hole's ball, a tube also reads the intact wall inside D (every face but the
+        // cap's).
+        let known_inside = self.cap.is_some();
         let known_wall = |p: &Point3<f64>, face: u32| {
             outside_e(p)
                 || (known_inside
@@ -831,7 +841,7 @@ impl Sections<'_> {
                 let base = &base;
                 // Towards a junction point, sections outside E only: from inside, a ray that
                 // leaves E crosses into whatever lies beyond D (another branch).
-                let outside = open_end || outside_e(c);
+                let outside = open_end || known_inside || outside_e(c);
                 let known_wall = &known_wall;
                 (0..m).map(move |j| {
                     if !outside {
@@ -884,6 +894,9 @@ impl Sections<'_> {
                 };
             }
         }
+        if open_end && self.narrowed {
+            self.widen_narrowed(points, frames, branch, &base, &mut detail);
+        }
         if known_inside {
             let known: Vec<bool> = read.iter().map(|r| r.is_some()).collect();
             let spacing: Vec<f64> = (0..n)
@@ -893,6 +906,105 @@ impl Sections<'_> {
         }
         detail
     }
+}
+
+impl Sections<'_> {
+    /// Inside E on a tube through a narrowing: where every ray of a section meets the narrowed
+    /// wall (within 1.5 section radii, on the tube's branch), that wall's polygon is scaled about
+    /// its centroid so that its mean distance from the centroid is the mean of the interpolated
+    /// section (`base` plus `detail`), and the section becomes that polygon, read along the
+    /// rays from the curve point: the vessel's own cross-section shape at its healthy size
+    /// (exact for a concentric narrowing; an eccentric plaque's lumen keeps its shape, widened).
+    fn widen_narrowed(
+        &self,
+        points: &[Point3<f64>],
+        frames: &[[Vector3<f64>; 3]],
+        branch: Option<usize>,
+        base: &(impl Fn(usize, usize) -> f64 + Sync),
+        detail: &mut [f64],
+    ) {
+        let m = self.rays;
+        let inside_e = |p: &Point3<f64>| {
+            self.balls
+                .iter()
+                .any(|b| (p - b.center).norm() < b.radius + self.grow)
+        };
+        let detail_ro: &[f64] = detail;
+        let rows: Vec<Option<Vec<f64>>> = (0..points.len())
+            .into_par_iter()
+            .map(|i| {
+                let (c, f) = (&points[i], &frames[i]);
+                if !inside_e(c) {
+                    return None;
+                }
+                let dirs: Vec<(f64, f64)> = (0..m)
+                    .map(|j| {
+                        let th = TAU * j as f64 / m as f64;
+                        (th.cos(), th.sin())
+                    })
+                    .collect();
+                let rho: Vec<f64> = (0..m).map(|j| base(i, j) + detail_ro[i * m + j]).collect();
+                let mut wall = Vec::with_capacity(m);
+                for (j, &(cs, sn)) in dirs.iter().enumerate() {
+                    let d = f[1] * cs + f[2] * sn;
+                    let hit = self.bvh.cast_ray(c, &d, 1.5 * rho[j])?;
+                    let p = c + d * hit.t;
+                    if !(hit.t > 0.0 && branch.is_none_or(|b| self.on_branch(&p, b, rho[j]))) {
+                        return None;
+                    }
+                    wall.push((hit.t * cs, hit.t * sn));
+                }
+                let g = wall.iter().fold((0.0, 0.0), |a, w| {
+                    (a.0 + w.0 / m as f64, a.1 + w.1 / m as f64)
+                });
+                let spread = wall
+                    .iter()
+                    .map(|w| (w.0 - g.0).hypot(w.1 - g.1))
+                    .sum::<f64>()
+                    / m as f64;
+                let target = rho.iter().sum::<f64>() / m as f64;
+                if spread <= 0.0 || target <= spread {
+                    return None;
+                }
+                let k = target / spread;
+                let poly: Vec<(f64, f64)> = wall
+                    .iter()
+                    .map(|w| (g.0 + k * (w.0 - g.0), g.1 + k * (w.1 - g.1)))
+                    .collect();
+                dirs.iter()
+                    .enumerate()
+                    .map(|(j, &dir)| ray_polygon(dir, &poly).map(|t| t - base(i, j)))
+                    .collect()
+            })
+            .collect();
+        for (i, row) in rows.into_iter().enumerate() {
+            if let Some(row) = row {
+                detail[i * m..(i + 1) * m].copy_from_slice(&row);
+            }
+        }
+    }
+}
+
+/// Distance from the origin along the unit direction `dir` to the closed polygon `poly` (the
+/// nearest crossing ahead), 2-D.
+fn ray_polygon(dir: (f64, f64), poly: &[(f64, f64)]) -> Option<f64> {
+    let n = poly.len();
+    let mut best: Option<f64> = None;
+    for a in 0..n {
+        let (p, q) = (poly[a], poly[(a + 1) % n]);
+        let e = (q.0 - p.0, q.1 - p.1);
+        // origin + t·dir = p + u·e
+        let den = dir.0 * (-e.1) - dir.1 * (-e.0);
+        if den.abs() < 1e-15 {
+            continue;
+        }
+        let t = (p.0 * (-e.1) - p.1 * (-e.0)) / den;
+        let u = (dir.0 * p.1 - dir.1 * p.0) / den;
+        if t > 0.0 && (0.0..=1.0).contains(&u) && best.is_none_or(|b| t < b) {
+            best = Some(t);
+        }
+    }
+    best
 }
 
 fn make_tube(
@@ -1100,7 +1212,8 @@ fn relax_harmonic(values: &mut [f64], known: &[bool], arc: &[f64], spacing: &[f6
                 if known[c] {
                     continue;
                 }
-                let mut sum = around * (values[i * m + (j + m - 1) % m] + values[i * m + (j + 1) % m]);
+                let mut sum =
+                    around * (values[i * m + (j + m - 1) % m] + values[i * m + (j + 1) % m]);
                 let mut weight = 2.0 * around;
                 if let Some(w) = back {
                     sum += w * values[c - m];
@@ -1208,6 +1321,19 @@ mod tests {
     }
 
     #[test]
+    fn rays_from_inside_meet_a_square_where_it_is() {
+        let square = [(-1.0, -2.0), (3.0, -2.0), (3.0, 2.0), (-1.0, 2.0)];
+        let t = |x: f64, y: f64| ray_polygon((x, y), &square).unwrap();
+        assert!((t(1.0, 0.0) - 3.0).abs() < 1e-12);
+        assert!((t(-1.0, 0.0) - 1.0).abs() < 1e-12);
+        assert!((t(0.0, 1.0) - 2.0).abs() < 1e-12);
+        let d = 0.5f64.sqrt();
+        assert!((t(-d, -d) - 2f64.sqrt()).abs() < 1e-12);
+        // From outside, looking away: nothing ahead.
+        assert!(ray_polygon((1.0, 0.0), &[(-3.0, -1.0), (-2.0, -1.0), (-2.0, 1.0)]).is_none());
+    }
+
+    #[test]
     fn ball_groups_join_overlapping_balls() {
         let b = |x: f64| Ball {
             center: Point3::new(x, 0.0, 0.0),
@@ -1217,4 +1343,3 @@ mod tests {
         assert_eq!(g, vec![vec![0, 2], vec![1, 3]]);
     }
 }
-

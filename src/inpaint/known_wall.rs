@@ -109,7 +109,10 @@ pub fn keep_known_wall(
 pub fn rim_balls(rim: &[(Point3<f64>, Point3<f64>)], balls: &[Ball]) -> Vec<bool> {
     balls
         .iter()
-        .map(|ball| rim.iter().any(|(a, b)| ball.contains(a) || ball.contains(b)))
+        .map(|ball| {
+            rim.iter()
+                .any(|(a, b)| ball.contains(a) || ball.contains(b))
+        })
         .collect()
 }
 
@@ -136,7 +139,11 @@ pub fn hole_rims(
     rim.sort_unstable();
     rim.into_iter()
         .map(|(a, b)| (closed.vertices[a as usize], closed.vertices[b as usize]))
-        .filter(|(a, b)| balls.iter().any(|ball| ball.contains(a) || ball.contains(b)))
+        .filter(|(a, b)| {
+            balls
+                .iter()
+                .any(|ball| ball.contains(a) || ball.contains(b))
+        })
         .collect()
 }
 
@@ -175,8 +182,11 @@ mod tests {
             .filter(|f| !f.iter().any(|&v| chop.contains(&tube.vertices[v as usize])))
             .copied()
             .collect();
-        let (closed, report) =
-            cap_holes(&TriMesh::new(tube.vertices.clone(), faces), &CapOptions::default()).unwrap();
+        let (closed, report) = cap_holes(
+            &TriMesh::new(tube.vertices.clone(), faces),
+            &CapOptions::default(),
+        )
+        .unwrap();
         let d = [Ball {
             center: chop.center,
             radius: 8.0,
@@ -187,7 +197,15 @@ mod tests {
         let mut psi = phi0.clone();
         psi.data_mut().iter_mut().for_each(|v| *v -= 2.0);
         let mut w = vec![1.0f32; phi0.data().len()];
-        let lowered = keep_known_wall(&closed, report.cap_faces.clone(), &d, &phi0, &psi, &mut w, h);
+        let lowered = keep_known_wall(
+            &closed,
+            report.cap_faces.clone(),
+            &d,
+            &phi0,
+            &psi,
+            &mut w,
+            h,
+        );
         assert!(lowered > 0);
         let at = |x: f64, y: f64, z: f64| {
             let i = ((x + 3.0) / h).round() as usize;
@@ -204,7 +222,10 @@ mod tests {
         assert_eq!(at(0.0, 3.0, 20.0), 1.0);
         // Without a cap in D (a narrowing of a closed mesh) nothing changes.
         let mut w2 = vec![1.0f32; phi0.data().len()];
-        assert_eq!(keep_known_wall(&closed, 0..0, &d, &phi0, &psi, &mut w2, h), 0);
+        assert_eq!(
+            keep_known_wall(&closed, 0..0, &d, &phi0, &psi, &mut w2, h),
+            0
+        );
         assert!(w2.iter().all(|&v| v == 1.0));
     }
 }

@@ -504,7 +504,15 @@ pub fn repair_with_centerline(
         }
     };
     // The intact wall around a hole is known: the fill acts in the hole's shadow only.
-    keep_known_wall(&closed_input, cap_faces, balls, &phi0, &psi, &mut weights, h);
+    keep_known_wall(
+        &closed_input,
+        cap_faces,
+        balls,
+        &phi0,
+        &psi,
+        &mut weights,
+        h,
+    );
     // The fill is united with the input: the damage a repair is for (a chopped wall, a
     // narrowing, an occlusion) is missing volume, so what the input has in D is kept.
     psi.data_mut()
