@@ -65,7 +65,10 @@ pub fn keep_known_wall(
         .map(|(k, ((w, known), fill))| {
             let mut n = 0;
             for (i, w) in w.iter_mut().enumerate() {
-                if *w <= 0.0 || fill[i] >= known[i] {
+                // Inside the input, or outside the fill, beyond the voxel next to the surface, the
+                // union's sign is the same whatever the weight: nothing to keep.
+                let band = h as f32;
+                if *w <= 0.0 || fill[i] >= known[i] || known[i] < -band || fill[i] > band {
                     continue;
                 }
                 let p = t.index_to_world(Vector3::new((i % nx) as f64, (i / nx) as f64, k as f64));
