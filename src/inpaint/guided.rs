@@ -490,8 +490,10 @@ fn plan_group(
             kinds.push(GuideKind::Bridge);
         }
         _ => {
-            // A junction: where the anchors' axes meet (least squares) when that is in E, else
-            // the centreline's junction in E nearest to the anchors, else their centroid.
+            // A junction: the centreline's junction in E nearest to the anchors, else where the
+            // anchors' axes meet (least squares) when that is in E, else their centroid. (The
+            // axes of branches that part at a shallow angle meet far from where they part: the
+            // carotid's, 4.7 mm downstream, 2.6 junction radii.)
             let anchors: Vec<Anchor> = single.iter().map(|&i| stubs[i].anchor).collect();
             let sum = anchors
                 .iter()
@@ -505,16 +507,13 @@ fn plan_group(
                     radius: a.radius,
                 })
                 .collect();
-            let j = junction_point(&axes)
+            let j = centerline
+                .junctions
+                .iter()
+                .map(|j| j.position)
                 .filter(|p| in_e(p))
-                .or_else(|| {
-                    centerline
-                        .junctions
-                        .iter()
-                        .map(|j| j.position)
-                        .filter(|p| in_e(p))
-                        .min_by(|a, b| (a - centroid).norm().total_cmp(&(b - centroid).norm()))
-                })
+                .min_by(|a, b| (a - centroid).norm().total_cmp(&(b - centroid).norm()))
+                .or_else(|| junction_point(&axes).filter(|p| in_e(p)))
                 .unwrap_or(centroid);
             for a in &anchors {
                 tubes.push(to_point(a, j));
