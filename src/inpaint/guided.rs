@@ -26,8 +26,9 @@
 //!    to all anchor axes in least squares), end there in a round cap and are joined by a smooth
 //!    minimum of a quarter radius (the fillet of a carina); a single one beside a vessel that
 //!    crosses D is a side branch, continued to that vessel's curve where its axis meets it and
-//!    joined the same way; a single one alone is continued along its own damaged centreline and
-//!    capped.
+//!    joined the same way; a single one alone is bridged to the branch's open vessel end (the
+//!    centre of a cut across the vessel, outside the damage) and cut flat there, or, where the
+//!    branch ends closed, continued along its own damaged centreline and capped round.
 //! 3. **Sections.** Along a curve, a rotation-minimising frame (double reflection, Wang, Jüttler,
 //!    Zheng and Liu 2008) is carried from the first anchor; the section at arc-length fraction w
 //!    is (1 − w)·ρ_A(θ) + w·ρ_B(θ), both profiles read in the carried frame, so a tapering or
@@ -104,6 +105,8 @@ pub enum EndCap {
     Open,
     /// Closed by a ball of the section's mean radius (a junction point, a dead end).
     Round,
+    /// Cut by the plane across the last sample (a branch that ends at an open vessel end).
+    Flat,
 }
 
 /// One tube of the fill: a sampled curve with frames and the sections at its two ends.
@@ -477,12 +480,55 @@ fn plan_group(
             kinds.push(GuideKind::Junction);
         }
         1 => {
-            // A dead end: continued along its own (damaged) centreline, capped.
+            // A dead end. Where the branch ends at an open vessel end (a cut across the vessel,
+            // whose centre the end's loop gives, outside the damage), bridged from the anchor to
+            // that end like a vessel through D and cut flat there; otherwise (a closed end, a
+            // stump) continued along its own damaged centreline and capped round.
             let st = &stubs[single[0]];
             let mut pts = vec![st.anchor.point];
             pts.extend(st.run.iter().copied());
-            let pts = resample(&pts, spacing);
-            tubes.push(make_tube(&sections, pts, &st.anchor, None, EndCap::Round));
+            let open_end = st.anchor.branch.and_then(|b| {
+                let br = &centerline.branches[b];
+                let last = pts.last()?;
+                let near = |q: Option<&Point3<f64>>| q.map_or(f64::INFINITY, |q| (q - last).norm());
+                let kind = if near(br.points.first()) <= near(br.points.last()) {
+                    br.start
+                } else {
+                    br.end
+                };
+                // The run's last stretch of about one radius gives the end's direction.
+                let n = pts.len();
+                let back = pts[..n - 1]
+                    .iter()
+                    .rev()
+                    .find(|q| (*q - last).norm() >= st.anchor.radius)
+                    .unwrap_or(&pts[0]);
+                let into = (back - last).try_normalize(1e-12)?;
+                (kind == EndKind::OpenEnd && n >= 2).then_some(Anchor {
+                    point: *last,
+                    into,
+                    radius: st.anchor.radius,
+                    clear: false,
+                    branch: None,
+                    index: 0,
+                })
+            });
+            match open_end {
+                Some(end) => tubes.push(make_tube(
+                    &sections,
+                    hermite(&st.anchor, &end, spacing),
+                    &st.anchor,
+                    Some(&end),
+                    EndCap::Flat,
+                )),
+                None => tubes.push(make_tube(
+                    &sections,
+                    resample(&pts, spacing),
+                    &st.anchor,
+                    None,
+                    EndCap::Round,
+                )),
+            }
             kinds.push(GuideKind::DeadEnd);
         }
         2 => {
@@ -1141,7 +1187,11 @@ impl GuideTube {
         }
         let perp = v - t * along;
         let theta = perp.dot(&e2).atan2(perp.dot(&e1));
-        perp.norm() - self.radius_at(i, theta)
+        let radial = perp.norm() - self.radius_at(i, theta);
+        if last && along > 0.0 && self.end_cap == EndCap::Flat {
+            return radial.max(along);
+        }
+        radial
     }
 }
 
