@@ -41,7 +41,8 @@
 //!    D (issue 21's "details carried across D"; faded out towards a junction point, and not read
 //!    within a junction's flare, whose wall is no single vessel's). Around a hole (a group of
 //!    balls holding a cap's rim, [`HoleCaps`]), every tube also reads the wall inside D wherever
-//!    its ray meets the input's own triangles rather than the cap: that wall is intact. The
+//!    its ray meets the input's own triangles rather than the cap, within a junction's flare
+//!    too (on the tube's own branch): that wall is intact. The
 //!    offsets are then relaxed to the harmonic interpolation of the readings on the tube's wall
 //!    chart (arc length × arc of the section), so the missing part of a section takes its shape
 //!    from the wall beside it around the vessel as well as along it. Through a narrowing (an
@@ -914,8 +915,9 @@ impl Sections<'_> {
                     let d = f[1] * th.cos() + f[2] * th.sin();
                     let rho = base(i, j);
                     // Within a junction's flare the wall is no single vessel's (as for the
-                    // anchors' sections).
-                    if self.in_flare(c, rho) {
+                    // anchors' sections); around a hole, the intact wall there is read too
+                    // (on the tube's own branch): the fill's taper into the junction follows it.
+                    if !known_inside && self.in_flare(c, rho) {
                         return None;
                     }
                     let hit = self.bvh.cast_ray(c, &d, 1.5 * rho)?;
