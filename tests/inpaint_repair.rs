@@ -448,13 +448,7 @@ fn a_hole_next_to_an_open_end_is_bridged_to_that_end() {
         center: Point3::new(3.0, 0.0, 4.0),
         radius: 3.0,
     };
-    let faces = tube
-        .faces
-        .iter()
-        .filter(|f| !f.iter().any(|&v| chop.contains(&tube.vertices[v as usize])))
-        .copied()
-        .collect();
-    let damaged = TriMesh::new(tube.vertices.clone(), faces);
+    let damaged = common::punch_hole(&tube, chop.center, chop.radius);
     let d = [Ball {
         center: chop.center,
         radius: 1.3 * chop.radius,

@@ -14,7 +14,9 @@
 
 mod common;
 
-use common::{data_dir, hausdorff_in, one_sided_faces_near, vesselmsr, volume_error_in};
+use common::{
+    data_dir, hausdorff_in, one_sided_faces_near, punch_hole, vesselmsr, volume_error_in,
+};
 use nalgebra::Point3;
 use serde_json::Value;
 use std::path::Path;
@@ -26,13 +28,7 @@ use vesselmsr::TriMesh;
 
 /// `mesh` without every triangle that has a vertex in `chop`, its largest piece kept.
 fn chopped(mesh: &TriMesh, chop: &Ball) -> TriMesh {
-    let faces: Vec<[u32; 3]> = mesh
-        .faces
-        .iter()
-        .filter(|f| !f.iter().any(|&v| chop.contains(&mesh.vertices[v as usize])))
-        .copied()
-        .collect();
-    let holed = TriMesh::new(mesh.vertices.clone(), faces);
+    let holed = punch_hole(mesh, chop.center, chop.radius);
     let (count, labels) = connected_components(&holed);
     let mut sizes = vec![0usize; count];
     for &l in &labels {
@@ -47,6 +43,31 @@ fn chopped(mesh: &TriMesh, chop: &Ball) -> TriMesh {
         .map(|(f, _)| *f)
         .collect();
     TriMesh::new(mesh.vertices.clone(), faces)
+}
+
+/// `vesselmsr repair DAMAGED FLAG -o … --report … -q` in `dir`: the repaired mesh and report.
+fn repair_by_cli(damaged: &TriMesh, flag: &str, dir: &Path) -> (TriMesh, Value) {
+    let input = dir.join("damaged.stl");
+    write_mesh(&input, damaged).unwrap();
+    let (output, report) = (dir.join("repaired.stl"), dir.join("report.json"));
+    let p = |x: &Path| x.to_str().unwrap().to_string();
+    let run = vesselmsr(&[
+        "repair",
+        &p(&input),
+        flag,
+        "-o",
+        &p(&output),
+        "--report",
+        &p(&report),
+        "-q",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    (read_mesh(&output).unwrap(), report)
 }
 
 /// Chops `file` (data/) at `centre` with a ball of `radius`, repairs it with `repair --holes`
@@ -66,27 +87,7 @@ fn chop_and_repair(file: &str, centre: [f64; 3], radius: f64, dir: &Path) -> (f6
         damaged.num_faces() + 300 < truth.num_faces(),
         "the chop removed a wall"
     );
-    let input = dir.join("damaged.stl");
-    write_mesh(&input, &damaged).unwrap();
-    let (output, report) = (dir.join("repaired.stl"), dir.join("report.json"));
-    let p = |x: &Path| x.to_str().unwrap().to_string();
-    let run = vesselmsr(&[
-        "repair",
-        &p(&input),
-        "--holes",
-        "-o",
-        &p(&output),
-        "--report",
-        &p(&report),
-        "-q",
-    ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let report: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
-    let repaired = read_mesh(&output).unwrap();
+    let (repaired, report) = repair_by_cli(&damaged, "--holes", dir);
     let info = mesh_info(&repaired);
     assert!(info.watertight, "not watertight");
     assert!(
@@ -289,31 +290,7 @@ fn a_narrowing_of_the_capped_aorta_is_widened_to_its_own_shape() {
         radius: 3.0 * sigma,
     };
     let dir = tempfile::tempdir().unwrap();
-    let (input, output, report) = (
-        dir.path().join("narrowed.stl"),
-        dir.path().join("repaired.stl"),
-        dir.path().join("report.json"),
-    );
-    write_mesh(&input, &damaged).unwrap();
-    let p = |x: &Path| x.to_str().unwrap().to_string();
-    let run = vesselmsr(&[
-        "repair",
-        &p(&input),
-        "--stenoses",
-        "30",
-        "-o",
-        &p(&output),
-        "--report",
-        &p(&report),
-        "-q",
-    ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let report: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
-    let repaired = read_mesh(&output).unwrap();
+    let (repaired, report) = repair_by_cli(&damaged, "--stenoses=30", dir.path());
     assert!(mesh_info(&repaired).watertight);
     let h = report["parameters"]["voxel"].as_f64().unwrap();
     let before = hausdorff_in(&damaged, &truth, &[d]) / h;
