@@ -138,7 +138,7 @@ pub fn hole_rims(
         .filter(|&(_, n)| n == 1)
         .map(|(e, _)| e)
         .collect();
-    // Hash order is random; the sum over segments is a minimum, but keep the output fixed.
+    // Hash order is random: sorted, so the rim (and every figure from it) is the same each run.
     rim.sort_unstable();
     rim.into_iter()
         .map(|(a, b)| (closed.vertices[a as usize], closed.vertices[b as usize]))
