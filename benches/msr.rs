@@ -40,7 +40,6 @@ use std::time::{Duration, Instant};
 use vesselmsr::grid::{grid_for_mesh, GridOptions};
 use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
 use vesselmsr::msr::decompose::{decompose, DecomposeOptions, Decomposition};
-use vesselmsr::msr::reconstruct::{rebuild_from_tangent_planes, AdvectOptions};
 
 const LEVELS: usize = 5;
 
@@ -57,16 +56,10 @@ fn ours(mesh: &vesselmsr::TriMesh, phi0: &vesselmsr::grid::Grid3) -> (Decomposit
     let decomposed = start.elapsed().as_secs_f64();
     let start = Instant::now();
     for i in 1..=LEVELS {
-        let data = d.msr.level_data(i);
         std::hint::black_box(
-            rebuild_from_tangent_planes(
-                &d.level_sets[i],
-                &data.points,
-                &data.normals,
-                &data.details,
-                &AdvectOptions::default(),
-            )
-            .expect("rebuild runs"),
+            d.msr
+                .rebuild_level(&d.level_sets[i], i)
+                .expect("rebuild runs"),
         );
     }
     (d, decomposed, start.elapsed().as_secs_f64())

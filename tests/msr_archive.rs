@@ -337,7 +337,6 @@ fn archive_round_trips_within_its_lattice_and_numpy_decodes_it() {
 #[test]
 fn numpy_decodes_the_refined_samples_of_a_decomposition() {
     use vesselmsr::grid::{grid_for_mesh, GridOptions};
-    use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
     use vesselmsr::mesh::primitives::torus;
     use vesselmsr::msr::decompose::{decompose, DecomposeOptions};
     let mesh = torus(6.0, 2.0, 48, 16, Point3::origin());
@@ -347,13 +346,7 @@ fn numpy_decodes_the_refined_samples_of_a_decomposition() {
         ..Default::default()
     };
     let spec = grid_for_mesh(&mesh, &grid).unwrap();
-    let phi = voxelize(
-        &mesh,
-        spec.dims,
-        spec.transform,
-        &VoxelizeOptions::default(),
-    )
-    .unwrap();
+    let phi = common::phi_on(&mesh, &spec);
     let opts = DecomposeOptions {
         levels: 3,
         ..Default::default()

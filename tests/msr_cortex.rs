@@ -17,7 +17,6 @@ mod common;
 use common::*;
 use vesselmsr::grid::{grid_for_mesh, GridOptions};
 use vesselmsr::levelset::marching_cubes::{extract_surface, ExtractOptions};
-use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
 use vesselmsr::mesh::distance::{surface_distance, SurfaceDistanceOptions};
 use vesselmsr::mesh::info::mesh_info;
 use vesselmsr::msr::decompose::{decompose, DecomposeOptions};
@@ -42,13 +41,7 @@ mod slow {
         let volume0 = mesh_info(&mesh).volume.unwrap();
         let spec = grid_for_mesh(&mesh, &GridOptions::default()).unwrap();
         let h = spec.voxel();
-        let phi = voxelize(
-            &mesh,
-            spec.dims,
-            spec.transform,
-            &VoxelizeOptions::default(),
-        )
-        .unwrap();
+        let phi = common::phi_on(&mesh, &spec);
         let opts = DecomposeOptions {
             levels: 5,
             keep_level_sets: true,

@@ -3,10 +3,11 @@
 //! 0 as the levels go on); the vertices method gives back the input vertices to 1e-5h; the
 //! level-set method rebuilds each level from the next within 0.5h (Hausdorff).
 
+mod common;
+
 use nalgebra::Point3;
 use vesselmsr::grid::{grid_for_mesh, GridOptions};
 use vesselmsr::levelset::marching_cubes::{extract_surface, ExtractOptions};
-use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
 use vesselmsr::mesh::distance::{surface_distance, SurfaceDistanceOptions};
 use vesselmsr::mesh::primitives::icosphere;
 use vesselmsr::msr::decompose::{decompose, DecomposeOptions};
@@ -34,13 +35,7 @@ fn ellipsoid_decomposes_and_reconstructs() {
     )
     .unwrap();
     let h = spec.voxel();
-    let phi = voxelize(
-        &mesh,
-        spec.dims,
-        spec.transform,
-        &VoxelizeOptions::default(),
-    )
-    .unwrap();
+    let phi = common::phi_on(&mesh, &spec);
     let opts = DecomposeOptions {
         levels: 4,
         time: Some(4.0 * 16.0 * h * h),

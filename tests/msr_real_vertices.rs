@@ -14,12 +14,10 @@ mod common;
 use common::*;
 use vesselmsr::grid::{grid_for_mesh, GridOptions};
 use vesselmsr::levelset::marching_cubes::{extract_surface, ExtractOptions};
-use vesselmsr::levelset::voxelize::{voxelize, VoxelizeOptions};
 use vesselmsr::mesh::distance::{surface_distance, SurfaceDistanceOptions};
 use vesselmsr::msr::archive::{read_msr, write_msr};
 use vesselmsr::msr::compact::QUANTUM_VOXELS;
 use vesselmsr::msr::decompose::{decompose, DecomposeOptions};
-use vesselmsr::msr::reconstruct::{rebuild_from_tangent_planes, AdvectOptions};
 use vesselmsr::msr::Msr;
 
 /// S̃_{N−1}, …, S̃_{N−levels}: the level-set reconstructions of `msr` carried back from φ_T level
@@ -29,15 +27,7 @@ fn rebuilds(msr: &Msr, levels: usize) -> Vec<vesselmsr::TriMesh> {
     let mut phi = msr.phi.clone();
     let mut out = Vec::new();
     for i in (n + 1 - levels..=n).rev() {
-        let data = msr.level_data(i);
-        phi = rebuild_from_tangent_planes(
-            &phi,
-            &data.points,
-            &data.normals,
-            &data.details,
-            &AdvectOptions::default(),
-        )
-        .unwrap();
+        phi = msr.rebuild_level(&phi, i).unwrap();
         out.push(extract_surface(&phi, &ExtractOptions::default()).unwrap());
     }
     out
@@ -54,7 +44,7 @@ fn vertices_method_gives_back(pick: impl Fn(&str) -> bool, max_ratio: f64, level
     for (file, mesh) in meshes.iter().filter(|(f, _)| pick(f)) {
         let spec = grid_for_mesh(mesh, &GridOptions::default()).unwrap();
         let h = spec.voxel();
-        let phi = voxelize(mesh, spec.dims, spec.transform, &VoxelizeOptions::default()).unwrap();
+        let phi = common::phi_on(mesh, &spec);
         let d = decompose(mesh, phi, &DecomposeOptions::default(), |_, _| {}).unwrap();
         let path = tmp.path().join("msr.npz");
         write_msr(&path, &d.msr).unwrap();

@@ -23,7 +23,6 @@ use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::mesh::distance::{surface_distance, SurfaceDistanceOptions};
 use crate::mesh::info::{mesh_info, MeshInfo};
 use crate::msr::archive::read_msr_within;
-use crate::msr::reconstruct::{rebuild_from_tangent_planes, AdvectOptions};
 use indicatif::ProgressStyle;
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -140,14 +139,9 @@ pub fn run(ctx: &Context, args: &ReconstructArgs) -> anyhow::Result<()> {
             for i in (k + 1..=n).rev() {
                 bar.set_message(format!("level {i} → {}", i - 1));
                 let data = msr.level_data(i);
-                phi = rebuild_from_tangent_planes(
-                    &phi,
-                    &data.points,
-                    &data.normals,
-                    &data.details,
-                    &AdvectOptions::default(),
-                )
-                .map_err(|e| anyhow::anyhow!("{}: level {i}: {e}", args.archive.display()))?;
+                phi = msr
+                    .rebuild_level(&phi, i)
+                    .map_err(|e| anyhow::anyhow!("{}: level {i}: {e}", args.archive.display()))?;
                 let rebuilt = extract_surface(&phi, &ExtractOptions::default()).map_err(|e| {
                     anyhow::anyhow!("{}: level {}: {e}", args.archive.display(), i - 1)
                 })?;

@@ -864,6 +864,13 @@ impl Sections<'_> {
     /// side (the first reading held before the first one; past the last, held when the tube
     /// ends at an anchor (`open_end`), else faded out over one section radius; no offset for
     /// an angle never read).
+    /// Whether `p` lies in E (the balls of D grown by the clearance).
+    fn in_e(&self, p: &Point3<f64>) -> bool {
+        self.balls
+            .iter()
+            .any(|b| (p - b.center).norm() < b.radius + self.grow)
+    }
+
     /// Whether `p` lies within a junction's inscribed sphere grown by `r`.
     fn in_flare(&self, p: &Point3<f64>, r: f64) -> bool {
         self.centerline
@@ -882,11 +889,7 @@ impl Sections<'_> {
         base: impl Fn(usize, usize) -> f64 + Sync,
     ) -> Vec<f64> {
         let m = self.rays;
-        let outside_e = |p: &Point3<f64>| {
-            self.balls
-                .iter()
-                .all(|b| (p - b.center).norm() >= b.radius + self.grow)
-        };
+        let outside_e = |p: &Point3<f64>| !self.in_e(p);
         // Through a hole's ball, a tube also reads the intact wall inside D (every face but the
         // cap's).
         let known_inside = self.cap.is_some();
@@ -989,11 +992,7 @@ impl Sections<'_> {
         detail: &mut [f64],
     ) {
         let m = self.rays;
-        let inside_e = |p: &Point3<f64>| {
-            self.balls
-                .iter()
-                .any(|b| (p - b.center).norm() < b.radius + self.grow)
-        };
+        let inside_e = |p: &Point3<f64>| self.in_e(p);
         let detail_ro: &[f64] = detail;
         let rows: Vec<Option<Vec<f64>>> = (0..points.len())
             .into_par_iter()
@@ -1048,9 +1047,7 @@ impl Sections<'_> {
             }
         }
     }
-}
 
-impl Sections<'_> {
     /// A curve through a hole's ball moved onto the intact wall's centre: at each sample whose
     /// rays meet the intact wall (not the cap; within half a radius of `radius`, on the curve's
     /// `branch`) at three quarters of the angles or more, no quarter turn missing, the circle
@@ -1077,11 +1074,7 @@ impl Sections<'_> {
             return points;
         }
         let fr = frames(&points, into);
-        let inside_e = |p: &Point3<f64>| {
-            self.balls
-                .iter()
-                .any(|b| (p - b.center).norm() < b.radius + self.grow)
-        };
+        let inside_e = |p: &Point3<f64>| self.in_e(p);
         let fits: Vec<Option<Vector3<f64>>> = (0..n)
             .into_par_iter()
             .map(|i| {

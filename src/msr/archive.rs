@@ -585,7 +585,7 @@ fn read_compact(
     for (j, &d) in steps.iter().enumerate() {
         if d < 0 || (j > 0 && d == 0) || key + d as u64 >= ((levels + 1) * s) as u64 {
             return Err(bad(format!(
-                "member 'refine_key_steps': entry {j} ({d}) does not give an increasing key                  below {}",
+                "member 'refine_key_steps': entry {j} ({d}) does not give an increasing key below {}",
                 (levels + 1) * s
             )));
         }

@@ -6,7 +6,6 @@
 //! its full reconstruction chains the steps from φ_T instead (`vesselmsr reconstruct`).
 
 use super::decompose::Decomposition;
-use super::reconstruct::{rebuild_from_tangent_planes, AdvectOptions};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::mesh::distance::{surface_distance, SurfaceDistance, SurfaceDistanceOptions};
 use crate::{Error, Result};
@@ -31,14 +30,7 @@ pub fn measure_level_rebuilds(
     }
     (1..=n)
         .map(|i| {
-            let data = d.msr.level_data(i);
-            let rebuilt = rebuild_from_tangent_planes(
-                &d.level_sets[i],
-                &data.points,
-                &data.normals,
-                &data.details,
-                &AdvectOptions::default(),
-            )?;
+            let rebuilt = d.msr.rebuild_level(&d.level_sets[i], i)?;
             let truth = extract_surface(&d.level_sets[i - 1], &ExtractOptions::default())?;
             let got = extract_surface(&rebuilt, &ExtractOptions::default())?;
             let measured = surface_distance(&truth, &got, distance);

@@ -127,6 +127,20 @@ impl Msr {
         out
     }
 
+    /// φ of level i − 1 rebuilt from `above`, φ of level i, by level i's details: the
+    /// level-set IMST step ([`super::reconstruct::rebuild_from_tangent_planes`] with the
+    /// default options), as `vesselmsr reconstruct --method levelset` takes it.
+    pub fn rebuild_level(&self, above: &Grid3, i: usize) -> crate::Result<Grid3> {
+        let data = self.level_data(i);
+        super::reconstruct::rebuild_from_tangent_planes(
+            above,
+            &data.points,
+            &data.normals,
+            &data.details,
+            &super::reconstruct::AdvectOptions::default(),
+        )
+    }
+
     /// The normal details w_i of the samples that exist at level i − 1 (1 ≤ i ≤ N).
     pub fn level_normal_details(&self, i: usize) -> Vec<f64> {
         (self.normal_details[i - 1].iter().enumerate())

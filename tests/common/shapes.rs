@@ -73,3 +73,15 @@ pub fn soup_of(mesh: &TriMesh) -> TriMesh {
             .collect(),
     )
 }
+
+/// The signed distance grid φ of `mesh` on `spec` (the default voxelizer), as the decompose
+/// tests start from.
+pub fn phi_on(mesh: &TriMesh, spec: &vesselmsr::grid::spec::GridSpec) -> vesselmsr::grid::Grid3 {
+    vesselmsr::levelset::voxelize::voxelize(
+        mesh,
+        spec.dims,
+        spec.transform,
+        &vesselmsr::levelset::voxelize::VoxelizeOptions::default(),
+    )
+    .unwrap()
+}
