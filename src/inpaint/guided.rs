@@ -26,7 +26,10 @@
 //!    Runs that end inside D (a gap: the vessel cut in two; a junction in D) give
 //!    one-sided anchors: two are bridged the same way; three or more (a bifurcation) are each
 //!    continued to the junction point (the centreline's junction inside E, else the point nearest
-//!    to all anchor axes in least squares), end there in a round cap and are joined by a smooth
+//!    to all anchor axes in least squares), along a Hermite curve that leaves the junction the
+//!    way the damaged centreline does (the graph walked from the anchor's branch to that
+//!    junction; unless the anchor's tangent already points at the junction: a straight vessel,
+//!    whose centreline a cap bends), end there in a round cap and are joined by a smooth
 //!    minimum of a quarter radius (the fillet of a carina); a single one beside a vessel that
 //!    crosses D is a side branch, continued to that vessel's curve where its axis meets it and
 //!    joined the same way; a single one alone is bridged to the branch's open vessel end (the
@@ -445,11 +448,13 @@ fn plan_group(
         };
         make_tube(&sections, pts, a, Some(b), EndCap::Open, through)
     };
-    // A branch continued from its anchor to the point `j` (a junction), capped there.
-    let to_point = |a: &Anchor, j: Point3<f64>| {
+    // A branch continued from its anchor to the point `j` (a junction), capped there; it
+    // leaves j along `leave` (the damaged centreline's path from j to the anchor) where known,
+    // else straight towards the anchor.
+    let to_point = |a: &Anchor, j: Point3<f64>, leave: Option<Vector3<f64>>| {
         let end = Anchor {
             point: j,
-            into: -(j - a.point).try_normalize(1e-12).unwrap_or(a.into),
+            into: leave.unwrap_or_else(|| (a.point - j).try_normalize(1e-12).unwrap_or(-a.into)),
             radius: a.radius,
             clear: false,
             branch: None,
@@ -489,7 +494,7 @@ fn plan_group(
                 .min_by(|p, q| axis_distance(&a, p).total_cmp(&axis_distance(&a, q)))
                 .copied()
                 .expect("tubes have points");
-            tubes.push(to_point(&a, j));
+            tubes.push(to_point(&a, j, None));
             kinds.push(GuideKind::Junction);
         }
         1 => {
@@ -580,8 +585,10 @@ fn plan_group(
                 .min_by(|a, b| (a - centroid).norm().total_cmp(&(b - centroid).norm()))
                 .or_else(|| junction_point(&axes).filter(|p| in_e(p)))
                 .unwrap_or(centroid);
-            for a in &anchors {
-                tubes.push(to_point(a, j));
+            for (&i, a) in single.iter().zip(&anchors) {
+                let leave = leaving_direction(centerline, &stubs[i], &j)
+                    .map(|l| junction_tangent(a, &j, &l));
+                tubes.push(to_point(a, j, leave));
                 kinds.push(GuideKind::Junction);
             }
         }
@@ -597,6 +604,81 @@ struct Stub {
     outside: f64,
     run: Vec<Point3<f64>>,
     partner: Option<usize>,
+}
+
+/// The direction in which the damaged centreline leaves the junction at `j` towards the stub's
+/// anchor: the stub's run ends at its branch's junction, from which the branch graph is walked
+/// (breadth first) to the junction at `j`; the branch arriving there gives the direction from j
+/// to its point one junction radius away. None when `j` is no junction of the centreline or no
+/// path reaches it. (A vessel leaves a bifurcation along its own axis, not along the chord to
+/// its anchor: the aneurysm's daughter rises 1.6 mm from the junction before it turns.)
+fn leaving_direction(
+    centerline: &Centerline,
+    stub: &Stub,
+    j: &Point3<f64>,
+) -> Option<Vector3<f64>> {
+    let target = centerline
+        .junctions
+        .iter()
+        .position(|q| (q.position - j).norm() < 1e-9)?;
+    let end = *stub.run.last()?;
+    let bi = stub.anchor.branch?;
+    let near = |a: &Point3<f64>, b: &Point3<f64>| (a - b).norm() < 1e-9;
+    let at_junction = |b: usize, p: &Point3<f64>| {
+        centerline
+            .junctions
+            .iter()
+            .position(|q| q.branches.contains(&b) && near(&q.position, p))
+    };
+    let start = at_junction(bi, &end)?;
+    // Breadth first over junctions; `via[k]`: the branch by which junction k was reached.
+    let mut via: Vec<Option<usize>> = vec![None; centerline.junctions.len()];
+    let mut seen = vec![false; centerline.junctions.len()];
+    let mut queue = std::collections::VecDeque::from([start]);
+    seen[start] = true;
+    via[start] = Some(bi);
+    while let Some(k) = queue.pop_front() {
+        if k == target {
+            break;
+        }
+        for &b in &centerline.junctions[k].branches {
+            let br = centerline.branches.get(b)?;
+            for p in [br.points.first()?, br.points.last()?] {
+                if let Some(next) = at_junction(b, p).filter(|&n| !seen[n]) {
+                    seen[next] = true;
+                    via[next] = Some(b);
+                    queue.push_back(next);
+                }
+            }
+        }
+    }
+    let br = centerline.branches.get(via[target]?)?;
+    let reach = centerline.junctions[target].radius;
+    let mut pts: Vec<&Point3<f64>> = br.points.iter().collect();
+    if !near(br.points.first()?, j) {
+        pts.reverse();
+    }
+    let far = pts
+        .iter()
+        .find(|p| (**p - j).norm() >= reach)
+        .or(pts.last())?;
+    (**far - j).try_normalize(1e-12)
+}
+
+/// The tangent with which a junction branch's curve leaves the junction point `j` towards its
+/// anchor `a`, given the damaged centreline's leaving direction `leave`: `leave` where the
+/// anchor's own tangent misses j by 12° or more (the vessel bends between: a daughter curving
+/// off its parent), the chord from j to the anchor where it points at j within 4° (a straight
+/// vessel: in a hole over the aorta's bifurcation, the cap flattens the lumen and bends the
+/// damaged centreline 17–26° off the aorta's axis), blended linearly between.
+fn junction_tangent(a: &Anchor, j: &Point3<f64>, leave: &Vector3<f64>) -> Vector3<f64> {
+    let Some(chord) = (a.point - j).try_normalize(1e-12) else {
+        return *leave;
+    };
+    let w = (((-a.into).angle(&chord).to_degrees() - 4.0) / 8.0).clamp(0.0, 1.0);
+    (chord * (1.0 - w) + leave * w)
+        .try_normalize(1e-12)
+        .unwrap_or(*leave)
 }
 
 /// Distance from `p` to the half-line from the anchor into D (to the anchor itself behind it).
@@ -1585,5 +1667,104 @@ mod tests {
         };
         let g = ball_groups(&[b(0.0), b(5.0), b(1.5), b(6.0)]);
         assert_eq!(g, vec![vec![0, 2], vec![1, 3]]);
+    }
+
+    /// A straight branch from `a` to `b` sampled every 0.1, with kinds of its ends.
+    fn line_branch(
+        id: usize,
+        a: Point3<f64>,
+        b: Point3<f64>,
+        start: EndKind,
+        end: EndKind,
+    ) -> crate::centerline::Branch {
+        let n = ((b - a).norm() / 0.1).ceil() as usize;
+        let t = (b - a).normalize();
+        crate::centerline::Branch {
+            id,
+            component: 0,
+            length: (b - a).norm(),
+            points: (0..=n)
+                .map(|k| a + (b - a) * (k as f64 / n as f64))
+                .collect(),
+            radius: vec![1.0; n + 1],
+            tangent: vec![t; n + 1],
+            start,
+            end,
+        }
+    }
+
+    #[test]
+    fn a_junction_branch_leaves_the_junction_along_its_own_centreline() {
+        use crate::centerline::Junction;
+        use EndKind::{Junction as J, OpenEnd as O};
+        // The aneurysm's chop: the daughter rises along z from the bifurcation at the origin,
+        // then turns along x; the damage split it at k = (0, 0, 2) with a stub (branch 4).
+        let o = Point3::origin();
+        let k = Point3::new(0.0, 0.0, 2.0);
+        let branches = vec![
+            line_branch(0, Point3::new(0.0, -8.0, 0.0), o, O, J),
+            line_branch(1, Point3::new(-8.0, 0.0, 0.0), o, O, J),
+            line_branch(2, o, k, J, J),
+            line_branch(3, Point3::new(6.0, 0.0, 2.0), k, O, J),
+            line_branch(4, k, Point3::new(0.0, 1.0, 3.0), J, EndKind::End),
+        ];
+        let junctions = vec![
+            Junction {
+                id: 0,
+                component: 0,
+                position: o,
+                radius: 1.2,
+                branches: vec![0, 1, 2],
+            },
+            Junction {
+                id: 1,
+                component: 0,
+                position: k,
+                radius: 0.5,
+                branches: vec![2, 3, 4],
+            },
+        ];
+        let centerline = Centerline {
+            voxel: 0.1,
+            components: 1,
+            branches,
+            junctions,
+            endpoints: Vec::new(),
+            notices: Vec::new(),
+        };
+        // The daughter's anchor at x = 5, its run inside E from x = 4 to the split.
+        let br = &centerline.branches[3];
+        let anchor = Anchor {
+            point: br.points[10],
+            into: Vector3::new(-1.0, 0.0, 0.0),
+            radius: 1.0,
+            clear: true,
+            branch: Some(3),
+            index: 10,
+        };
+        let stub = Stub {
+            anchor,
+            outside: f64::INFINITY,
+            run: br.points[20..].to_vec(),
+            partner: None,
+        };
+        let leave = leaving_direction(&centerline, &stub, &o).expect("a path to the junction");
+        assert!(
+            (leave - Vector3::z()).norm() < 1e-9,
+            "leaves along {leave:?}"
+        );
+        // Not a junction of the centreline: no direction.
+        assert!(leaving_direction(&centerline, &stub, &Point3::new(0.0, 0.0, 1.0)).is_none());
+        // The anchor's tangent misses the junction by 22°: the centreline's direction is taken.
+        let t = junction_tangent(&anchor, &o, &leave);
+        assert!((t - Vector3::z()).norm() < 1e-9, "{t:?}");
+        // An anchor straight in line with the junction keeps the chord.
+        let straight = Anchor {
+            point: Point3::new(0.0, -8.0, 0.0),
+            into: Vector3::y(),
+            ..anchor
+        };
+        let t = junction_tangent(&straight, &o, &Vector3::new(0.4, -1.0, 0.0).normalize());
+        assert!((t + Vector3::y()).norm() < 1e-9, "{t:?}");
     }
 }
