@@ -45,7 +45,8 @@
 //!    within a junction's flare, whose wall is no single vessel's). Around a hole (a group of
 //!    balls holding a cap's rim, [`HoleCaps`]), every tube also reads the wall inside D wherever
 //!    its ray meets the input's own triangles rather than the cap, within a junction's flare
-//!    too (on the tube's own branch): that wall is intact. The
+//!    too (on the branches of the tube's anchors: a gap's two ends may lie on two): that wall
+//!    is intact. The
 //!    offsets are then relaxed to the harmonic interpolation of the readings on the tube's wall
 //!    chart (arc length × arc of the section), so the missing part of a section takes its shape
 //!    from the wall beside it around the vessel as well as along it. Through a narrowing (an
@@ -871,10 +872,14 @@ struct Sections<'a> {
 }
 
 impl Sections<'_> {
-    /// Whether wall point `p` belongs to branch `own`: no other branch of the centreline is
-    /// nearer by more than a quarter of `radius` (a ray that crossed a junction into a
-    /// neighbouring vessel ends on that vessel's wall).
-    fn on_branch(&self, p: &Point3<f64>, own: usize, radius: f64) -> bool {
+    /// Whether wall point `p` belongs to the branches `own` (a tube's anchors' branches; any
+    /// branch when empty): no other branch of the centreline is nearer by more than a quarter
+    /// of `radius` (a ray that crossed a junction into a neighbouring vessel ends on that
+    /// vessel's wall).
+    fn on_branch(&self, p: &Point3<f64>, own: &[usize], radius: f64) -> bool {
+        if own.is_empty() {
+            return true;
+        }
         let dist = |b: &crate::centerline::Branch| {
             b.points
                 .iter()
@@ -882,12 +887,16 @@ impl Sections<'_> {
                 .fold(f64::INFINITY, f64::min)
                 .sqrt()
         };
-        let mine = dist(&self.centerline.branches[own]);
+        let mine = own
+            .iter()
+            .filter_map(|&b| self.centerline.branches.get(b))
+            .map(dist)
+            .fold(f64::INFINITY, f64::min);
         self.centerline
             .branches
             .iter()
             .enumerate()
-            .all(|(i, b)| i == own || mine <= dist(b) + 0.25 * radius)
+            .all(|(i, b)| own.contains(&i) || mine <= dist(b) + 0.25 * radius)
     }
 
     /// The wall's distance from `c` along `rays` directions in the plane of `frame` (angles
@@ -906,7 +915,7 @@ impl Sections<'_> {
                 self.bvh
                     .cast_ray(c, &d, reach)
                     .map(|hit| hit.t)
-                    .filter(|&t| t > 0.0 && self.on_branch(&(c + d * t), branch, a.radius))
+                    .filter(|&t| t > 0.0 && self.on_branch(&(c + d * t), &[branch], a.radius))
             })
             .collect();
         let good = raw.iter().filter(|r| r.is_some()).count();
@@ -967,7 +976,7 @@ impl Sections<'_> {
         frames: &[[Vector3<f64>; 3]],
         arc: &[f64],
         open_end: bool,
-        branch: Option<usize>,
+        own: &[usize],
         base: impl Fn(usize, usize) -> f64 + Sync,
     ) -> Vec<f64> {
         let m = self.rays;
@@ -1010,7 +1019,7 @@ impl Sections<'_> {
                     (hit.t > 0.0
                         && (hit.t - rho).abs() < 0.5 * rho
                         && known_wall(&wall, hit.face)
-                        && branch.is_none_or(|b| self.on_branch(&wall, b, rho)))
+                        && self.on_branch(&wall, own, rho))
                     .then_some(hit.t - rho)
                 })
             })
@@ -1045,7 +1054,7 @@ impl Sections<'_> {
             }
         }
         if open_end && self.narrowed {
-            self.widen_narrowed(points, frames, branch, &base, &mut detail);
+            self.widen_narrowed(points, frames, own, &base, &mut detail);
         }
         if known_inside {
             let known: Vec<bool> = read.iter().map(|r| r.is_some()).collect();
@@ -1069,7 +1078,7 @@ impl Sections<'_> {
         &self,
         points: &[Point3<f64>],
         frames: &[[Vector3<f64>; 3]],
-        branch: Option<usize>,
+        own: &[usize],
         base: &(impl Fn(usize, usize) -> f64 + Sync),
         detail: &mut [f64],
     ) {
@@ -1095,7 +1104,7 @@ impl Sections<'_> {
                     let d = f[1] * cs + f[2] * sn;
                     let hit = self.bvh.cast_ray(c, &d, 1.5 * rho[j])?;
                     let p = c + d * hit.t;
-                    if !(hit.t > 0.0 && branch.is_none_or(|b| self.on_branch(&p, b, rho[j]))) {
+                    if !(hit.t > 0.0 && self.on_branch(&p, own, rho[j])) {
                         return None;
                     }
                     wall.push((hit.t * cs, hit.t * sn));
@@ -1144,7 +1153,7 @@ impl Sections<'_> {
         &self,
         points: Vec<Point3<f64>>,
         into: &Vector3<f64>,
-        branch: Option<usize>,
+        own: &[usize],
         radius: f64,
     ) -> Vec<Point3<f64>> {
         let n = points.len();
@@ -1172,7 +1181,7 @@ impl Sections<'_> {
                     let wall = c + d * hit.t;
                     if (hit.t - radius).abs() < 0.5 * radius
                         && !cap.contains(&(hit.face as usize))
-                        && branch.is_none_or(|b| self.on_branch(&wall, b, radius))
+                        && self.on_branch(&wall, own, radius)
                     {
                         known.push((hit.t * th.cos(), hit.t * th.sin()));
                         angles.push(j);
@@ -1313,11 +1322,18 @@ fn make_tube(
     end_cap: EndCap,
     recentre: bool,
 ) -> GuideTube {
+    // The wall a tube reads is on its anchors' branches (a gap's two sides may be two).
+    let mut own: Vec<usize> = a
+        .branch
+        .into_iter()
+        .chain(b.and_then(|b| b.branch))
+        .collect();
+    own.dedup();
     // Between two anchors of a vessel that passes a hole, the curve is moved onto the centre
     // of the intact wall around the hole.
     let points = match b {
         Some(b) if recentre && sections.cap.is_some() => {
-            sections.recentre(points, &a.into, a.branch, 0.5 * (a.radius + b.radius))
+            sections.recentre(points, &a.into, &own, 0.5 * (a.radius + b.radius))
         }
         _ => points,
     };
@@ -1354,7 +1370,7 @@ fn make_tube(
         let w = weight[i];
         start_profile[j] * (1.0 - w) + end_profile[j] * w
     };
-    let detail = sections.carry_details(&points, &frames, &acc, b.is_some(), a.branch, base);
+    let detail = sections.carry_details(&points, &frames, &acc, b.is_some(), &own, base);
     let chunks = points
         .chunks(CHUNK)
         .map(|run| {
