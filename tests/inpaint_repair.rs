@@ -470,7 +470,9 @@ fn a_hole_next_to_an_open_end_is_bridged_to_that_end() {
     let ve = volume_error_in(&r.mesh, &truth, &d);
     println!("hole by an open end: {hd:.2}h, {:+.2}% in D", 100.0 * ve);
     assert!(mesh_info(&r.mesh).watertight);
-    // Measured 0.51h / −1.27% (following the damaged centreline: 0.87h / −3.20%).
-    assert!(hd <= 0.7, "{hd}h");
-    assert!(ve.abs() <= 0.02, "{ve}");
+    // Measured 0.16h / −0.44% (0.51h / −1.27% with a harmonic fill of the wall's offsets;
+    // 1.28h / −3.06% with the biharmonic one while the rays of the flat end's own section, which
+    // graze the end's rim, were read; following the damaged centreline: 0.87h / −3.20%).
+    assert!(hd <= 0.4, "{hd}h");
+    assert!(ve.abs() <= 0.01, "{ve}");
 }

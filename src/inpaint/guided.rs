@@ -46,10 +46,10 @@
 //!    balls holding a cap's rim, [`HoleCaps`]), every tube also reads the wall inside D wherever
 //!    its ray meets the input's own triangles rather than the cap, within a junction's flare
 //!    too (on the branches of the tube's anchors: a gap's two ends may lie on two): that wall
-//!    is intact. The
-//!    offsets are then relaxed to the harmonic interpolation of the readings on the tube's wall
-//!    chart (arc length × arc of the section), so the missing part of a section takes its shape
-//!    from the wall beside it around the vessel as well as along it. Through a narrowing (an
+//!    is intact. The offsets over the hole are then the biharmonic interpolation of the
+//!    readings on the tube's wall chart (arc length × arc of the section; `wall_chart`), so the
+//!    missing part of a section takes its shape, slope and bulge from the wall beside it,
+//!    around the vessel as well as along it. Through a narrowing (an
 //!    intact lumen, `--stenoses`), a section whose rays all meet the narrowed wall takes that
 //!    wall's own shape, scaled about its centroid to the interpolated size.
 //! 4. **Field.** At a node x of D, each tube gives |x − c|⊥ − ρ(θ) from its nearest curve sample
@@ -63,6 +63,7 @@
 
 use super::junction::{junction_point, smooth_min, Branch as AxisBranch};
 use super::region::Ball;
+use super::wall_chart::fill_biharmonic;
 use crate::bvh::MeshBvh;
 use crate::centerline::{Centerline, EndKind};
 use crate::grid::Grid3;
@@ -976,10 +977,12 @@ impl Sections<'_> {
         frames: &[[Vector3<f64>; 3]],
         arc: &[f64],
         open_end: bool,
+        flat_end: bool,
         own: &[usize],
         base: impl Fn(usize, usize) -> f64 + Sync,
     ) -> Vec<f64> {
         let m = self.rays;
+        let n = points.len();
         let outside_e = |p: &Point3<f64>| !self.in_e(p);
         // Through a hole's ball, a tube also reads the intact wall inside D (every face but the
         // cap's).
@@ -999,7 +1002,10 @@ impl Sections<'_> {
                 let base = &base;
                 // Towards a junction point, sections outside E only: from inside, a ray that
                 // leaves E crosses into whatever lies beyond D (another branch).
-                let outside = open_end || known_inside || outside_e(c);
+                // The last sample of a tube cut flat lies in the plane of the vessel's open end:
+                // its rays graze the end's rim (readings off by a fifth of the wall's relief).
+                let outside =
+                    (open_end || known_inside || outside_e(c)) && !(flat_end && i + 1 == n);
                 let known_wall = &known_wall;
                 (0..m).map(move |j| {
                     if !outside {
@@ -1024,7 +1030,6 @@ impl Sections<'_> {
                 })
             })
             .collect();
-        let n = points.len();
         let mut detail = vec![0.0; n * m];
         for j in 0..m {
             let known: Vec<usize> = (0..n).filter(|&i| read[i * m + j].is_some()).collect();
@@ -1061,7 +1066,7 @@ impl Sections<'_> {
             let spacing: Vec<f64> = (0..n)
                 .map(|i| TAU / m as f64 * (0..m).map(|j| base(i, j)).sum::<f64>() / m as f64)
                 .collect();
-            relax_harmonic(&mut detail, &known, arc, &spacing, m);
+            fill_biharmonic(&mut detail, &known, arc, &spacing, m);
         }
         detail
     }
@@ -1370,7 +1375,8 @@ fn make_tube(
         let w = weight[i];
         start_profile[j] * (1.0 - w) + end_profile[j] * w
     };
-    let detail = sections.carry_details(&points, &frames, &acc, b.is_some(), &own, base);
+    let flat = end_cap == EndCap::Flat;
+    let detail = sections.carry_details(&points, &frames, &acc, b.is_some(), flat, &own, base);
     let chunks = points
         .chunks(CHUNK)
         .map(|run| {
@@ -1515,55 +1521,6 @@ pub fn fill_guided(phi: &mut Grid3, balls: &[Ball], guides: &[RegionGuide]) -> u
         .sum()
 }
 
-/// Relaxes the unknown cells of `values` (sample-major, `m` angles per sample, periodic in angle)
-/// to the harmonic interpolation of the known ones: Laplace's equation on the tube's wall chart,
-/// arc length `arc` along it and `spacing[i]` (world units) between neighbouring angles at
-/// sample i; the first and last samples mirror their neighbour (no flux). Successive
-/// over-relaxation from the given values, until no cell moves by more than 1e-5 of the mean
-/// spacing (at most [`HARMONIC_SWEEPS`] sweeps).
-fn relax_harmonic(values: &mut [f64], known: &[bool], arc: &[f64], spacing: &[f64], m: usize) {
-    let n = arc.len();
-    if n < 2 || known.iter().all(|&k| k) || !known.iter().any(|&k| k) {
-        return;
-    }
-    let tol = 1e-5 * spacing.iter().sum::<f64>() / n as f64;
-    let omega = 1.8;
-    for _ in 0..HARMONIC_SWEEPS {
-        let mut moved: f64 = 0.0;
-        for i in 0..n {
-            let back = (i > 0).then(|| 1.0 / (arc[i] - arc[i - 1]).max(1e-12).powi(2));
-            let fwd = (i + 1 < n).then(|| 1.0 / (arc[i + 1] - arc[i]).max(1e-12).powi(2));
-            let around = 1.0 / spacing[i].max(1e-12).powi(2);
-            for j in 0..m {
-                let c = i * m + j;
-                if known[c] {
-                    continue;
-                }
-                let mut sum =
-                    around * (values[i * m + (j + m - 1) % m] + values[i * m + (j + 1) % m]);
-                let mut weight = 2.0 * around;
-                if let Some(w) = back {
-                    sum += w * values[c - m];
-                    weight += w;
-                }
-                if let Some(w) = fwd {
-                    sum += w * values[c + m];
-                    weight += w;
-                }
-                let new = values[c] + omega * (sum / weight - values[c]);
-                moved = moved.max((new - values[c]).abs());
-                values[c] = new;
-            }
-        }
-        if moved < tol {
-            break;
-        }
-    }
-}
-
-/// Most sweeps of [`relax_harmonic`].
-const HARMONIC_SWEEPS: usize = 4000;
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1613,38 +1570,6 @@ mod tests {
             // On a plane curve the RMF keeps its binormal-like axis fixed.
             assert!((s.z.abs() - 1.0).abs() < 1e-6 || (r.z.abs() - 1.0).abs() < 1e-6);
         }
-    }
-
-    #[test]
-    fn the_harmonic_fill_of_a_hole_in_a_linear_chart_is_that_plane() {
-        // u(s, θ) = 2s + 3 on the known cells (harmonic: the Laplacian of a linear function is
-        // 0); a hole of 20 samples × 12 angles starts at 0 and must relax to it.
-        let (n, m) = (60, 24);
-        let arc: Vec<f64> = (0..n).map(|i| 0.1 * i as f64).collect();
-        let spacing = vec![0.3; n];
-        let truth = |i: usize| 2.0 * arc[i] + 3.0;
-        let mut known = vec![true; n * m];
-        let mut u: Vec<f64> = (0..n * m).map(|c| truth(c / m)).collect();
-        for i in 20..40 {
-            for j in 5..17 {
-                known[i * m + j] = false;
-                u[i * m + j] = 0.0;
-            }
-        }
-        relax_harmonic(&mut u, &known, &arc, &spacing, m);
-        let worst = (0..n * m)
-            .map(|c| (u[c] - truth(c / m)).abs())
-            .fold(0.0, f64::max);
-        assert!(worst < 1e-3, "worst {worst}");
-        // A hole on the first rows has no value below it: it takes the known rows' (no flux).
-        let mut known = vec![true; n * m];
-        let mut u = vec![1.0; n * m];
-        for c in 0..5 * m {
-            known[c] = false;
-            u[c] = -4.0;
-        }
-        relax_harmonic(&mut u, &known, &arc, &spacing, m);
-        assert!(u.iter().all(|v| (v - 1.0).abs() < 1e-3));
     }
 
     #[test]

@@ -22,3 +22,4 @@ pub mod repair;
 pub mod repair_budget;
 pub mod stitch;
 pub mod topology;
+pub mod wall_chart;
