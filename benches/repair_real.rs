@@ -49,8 +49,8 @@
 //! damaged centreline (`guided::leaving_direction`: the aneurysm's neck 13.13h → 3.10h), a tube
 //! to read the wall on both its anchors' branches (a gap's far side: occlusions 0.3–2.3h, were
 //! 0.6–3.9h) and the wall's offsets over a hole to be the biharmonic fill of the readings
-//! (`wall_chart`); 2 cores, load 1.6, 25 cases in 58 s, `cargo bench --bench repair_real`: ours median
-//! 1.99h / 1.6% (10 of 25 within 1.5h and 5%, 19 within 3h; chops 1.99h, stenoses 2.41h,
+//! (`wall_chart`); 2 cores, load 1.6, 25 cases in 58 s, `cargo bench --bench repair_real`:
+//! ours median 1.99h / 1.6% (10 of 25 within 1.5h and 5%, 19 within 3h; chops 1.99h, stenoses 2.41h,
 //! occlusions 1.04h); ours beats MeshLib on 24 of 25 (chops 14/15, stenoses 5/5, occlusions
 //! 5/5; it loses the carotid's chop#2, 1.54h against 1.25h), pymeshfix and pymeshlab on 25. Our
 //! whole command on a chop: median 0.85 s (0.36–1.48 s) against MeshLib's filler call 0.010 s
