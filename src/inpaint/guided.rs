@@ -49,9 +49,9 @@
 //!    is intact. The offsets over the hole are then the biharmonic interpolation of the
 //!    readings on the tube's wall chart (arc length × arc of the section; `wall_chart`), so the
 //!    missing part of a section takes its shape, slope and bulge from the wall beside it,
-//!    around the vessel as well as along it. Through a narrowing (an
-//!    intact lumen, `--stenoses`), a section whose rays all meet the narrowed wall takes that
-//!    wall's own shape, scaled about its centroid to the interpolated size.
+//!    around the vessel as well as along it. Through a narrowing (an intact lumen,
+//!    `--stenoses`), a section whose rays all meet the narrowed wall takes that wall's own
+//!    shape, scaled about its centroid to the interpolated size.
 //! 4. **Field.** At a node x of D, each tube gives |x − c|⊥ − ρ(θ) from its nearest curve sample
 //!    c (the offset projected on the section plane there; past an open anchor end the tube
 //!    continues straight, past a capped end it closes as a ball), and the fill is the smallest
@@ -951,7 +951,7 @@ impl Sections<'_> {
     /// of the module docs): read where the ray from a sample (outside D on a tube towards a
     /// junction point) meets the input's wall
     /// (E: D grown by the clearance) within half a section radius of where the section puts it,
-    /// on the anchor's `branch` (not a neighbouring vessel's wall at a junction),
+    /// on the anchors' branches `own` (not a neighbouring vessel's wall at a junction),
     /// and interpolated along the tube per angle, by arc length, between the readings on either
     /// side (the first reading held before the first one; past the last, held when the tube
     /// ends at an anchor (`open_end`), else faded out over one section radius; no offset for
@@ -1003,7 +1003,9 @@ impl Sections<'_> {
                 // Towards a junction point, sections outside E only: from inside, a ray that
                 // leaves E crosses into whatever lies beyond D (another branch).
                 // The last sample of a tube cut flat lies in the plane of the vessel's open end:
-                // its rays graze the end's rim (readings off by a fifth of the wall's relief).
+                // its rays graze the end's rim and misread the wall (on a straight tube 0.09
+                // off the readings one sample before, where they vary by 0.02), a slope the
+                // biharmonic fill carried across the hole.
                 let outside =
                     (open_end || known_inside || outside_e(c)) && !(flat_end && i + 1 == n);
                 let known_wall = &known_wall;
@@ -1074,7 +1076,7 @@ impl Sections<'_> {
 
 impl Sections<'_> {
     /// Inside E on a tube through a narrowing: where every ray of a section meets the narrowed
-    /// wall (within 1.5 section radii, on the tube's branch), that wall's polygon is scaled about
+    /// wall (within 1.5 section radii, on the tube's branches), that wall's polygon is scaled about
     /// its centroid so that its mean distance from the centroid is the mean of the interpolated
     /// section (`base` plus `detail`), and the section becomes that polygon, read along the
     /// rays from the curve point: the vessel's own cross-section shape at its healthy size
@@ -1145,8 +1147,8 @@ impl Sections<'_> {
     }
 
     /// A curve through a hole's ball moved onto the intact wall's centre: at each sample whose
-    /// rays meet the intact wall (not the cap; within half a radius of `radius`, on the curve's
-    /// `branch`) at three quarters of the angles or more, no quarter turn missing, the circle
+    /// rays meet the intact wall (not the cap; within half a radius of `radius`, on the branches
+    /// `own`) at three quarters of the angles or more, no quarter turn missing, the circle
     /// fitted to those wall points (Kåsa's algebraic fit) gives the section's centre. Beside E
     /// the curve runs on the vessel's centreline, so the mean offset there on either side is the
     /// fit's bias (a section that is not round), taken off inside E linearly between the sides.

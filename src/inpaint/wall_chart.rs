@@ -215,6 +215,16 @@ mod tests {
                 );
             }
         }
+        // A hole over the first rows has no reading beyond it: a constant chart stays constant
+        // (the plate's energy is 0 there), as a membrane with no flux through its end would.
+        let mut known = vec![true; 60 * 24];
+        let mut w = vec![1.0; 60 * 24];
+        for c in 0..5 * 24 {
+            known[c] = false;
+            w[c] = -4.0;
+        }
+        fill_biharmonic(&mut w, &known, &arc, &spacing, 24);
+        assert!(w.iter().all(|v| (v - 1.0).abs() < 1e-9), "{:?}", &w[..24]);
         // Nothing known: nothing changes.
         let mut v = vec![5.0; 60 * 24];
         fill_biharmonic(&mut v, &vec![false; 60 * 24], &arc, &spacing, 24);
