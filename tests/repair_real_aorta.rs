@@ -234,13 +234,7 @@ fn a_narrowing_of_the_capped_aorta_is_widened_to_its_own_shape() {
     // v ← c + (v − c)·(1 − 0.5·exp(−(s − s₀)²/(2σ²))). Repaired by `repair --stenoses 30`,
     // judged in D = the ball of 3σ: the fill keeps the narrowed wall's own cross-section shape
     // at the healthy size (guided::widen_narrowed; 4.40h / −1.9% before, 2.18h / −1.0% after).
-    let truth = read_mesh(&data_dir().join("aorta_abdominal_capped.stl")).unwrap();
-    let (cl, _) = vesselmsr::centerline::compute_centerline(
-        &truth,
-        &vesselmsr::centerline::CenterlineOptions::default(),
-    )
-    .unwrap();
-    let (b, k) = nearest_centreline_point(&cl, Point3::new(230.46, 118.04, 25.3));
+    let (truth, cl, b, k) = centreline_site("aorta_abdominal_capped.stl", [230.46, 118.04, 25.3]);
     let pts = &cl.branches[b].points;
     let r = cl.branches[b].radius[k];
     let sigma = 1.2 * r;
@@ -281,34 +275,63 @@ fn a_narrowing_of_the_capped_aorta_is_widened_to_its_own_shape() {
         center: pts[k],
         radius: 3.0 * sigma,
     };
-    let dir = tempfile::tempdir().unwrap();
-    let (repaired, report) = repair_by_cli(&damaged, "--stenoses=30", dir.path());
-    assert!(mesh_info(&repaired).watertight);
-    let h = report["parameters"]["voxel"].as_f64().unwrap();
-    let before = hausdorff_in(&damaged, &truth, &[d]) / h;
-    let hd = hausdorff_in(&repaired, &truth, &[d]) / h;
-    let ve = volume_error_in(&repaired, &truth, &[d]);
-    println!(
-        "narrowed capped aorta: damaged {before:.2}h, repaired {hd:.2}h / {:+.1}% in D",
-        100.0 * ve
+    let (before, hd, ve) = repair_in(
+        &damaged,
+        &truth,
+        d,
+        "--stenoses=30",
+        "narrowed capped aorta",
     );
     assert!(before > 5.0, "the narrowing is {before}h deep");
     assert!(hd <= 3.0, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
 }
 
-/// The (branch, point index) of the centreline point nearest to `p0`.
-fn nearest_centreline_point(
-    cl: &vesselmsr::centerline::Centerline,
-    p0: Point3<f64>,
-) -> (usize, usize) {
-    cl.branches
+/// `file` (data/), its centreline, and the (branch, point index) of the centreline point
+/// nearest to `p0`: where a damage of the benchmark repair_real is made.
+fn centreline_site(
+    file: &str,
+    p0: [f64; 3],
+) -> (TriMesh, vesselmsr::centerline::Centerline, usize, usize) {
+    let truth = read_mesh(&data_dir().join(file)).unwrap();
+    let (cl, _) = vesselmsr::centerline::compute_centerline(
+        &truth,
+        &vesselmsr::centerline::CenterlineOptions::default(),
+    )
+    .unwrap();
+    let p0 = Point3::from(p0);
+    let (b, k) = cl
+        .branches
         .iter()
         .enumerate()
         .flat_map(|(b, br)| br.points.iter().enumerate().map(move |(k, p)| (b, k, p)))
         .min_by(|x, y| (x.2 - p0).norm().total_cmp(&(y.2 - p0).norm()))
         .map(|(b, k, _)| (b, k))
-        .unwrap()
+        .unwrap();
+    (truth, cl, b, k)
+}
+
+/// `damaged` repaired by `repair FLAG` (watertight), judged in `d` against `truth`: the damaged
+/// input's and the repair's Hausdorff distance in voxels and the repair's volume error.
+fn repair_in(
+    damaged: &TriMesh,
+    truth: &TriMesh,
+    d: Ball,
+    flag: &str,
+    what: &str,
+) -> (f64, f64, f64) {
+    let dir = tempfile::tempdir().unwrap();
+    let (repaired, report) = repair_by_cli(damaged, flag, dir.path());
+    assert!(mesh_info(&repaired).watertight);
+    let h = report["parameters"]["voxel"].as_f64().unwrap();
+    let before = hausdorff_in(damaged, truth, &[d]) / h;
+    let hd = hausdorff_in(&repaired, truth, &[d]) / h;
+    let ve = volume_error_in(&repaired, truth, &[d]);
+    println!(
+        "{what}: damaged {before:.2}h, repaired {hd:.2}h / {:+.1}% in D",
+        100.0 * ve
+    );
+    (before, hd, ve)
 }
 
 #[test]
@@ -319,13 +342,7 @@ fn an_occlusion_of_the_open_aorta_carries_the_wall_across_the_gap() {
     // vessel is cut in two: its two ends are bridged, and the wall the tube reads inside D is on
     // either end's branch (3.85h / −3.2% in D while only the first end's wall was read: the
     // truth's lobe on both sides of the gap was lost, the section across the gap round).
-    let truth = read_mesh(&data_dir().join("aorta_abdominal_open_ends.stl")).unwrap();
-    let (cl, _) = vesselmsr::centerline::compute_centerline(
-        &truth,
-        &vesselmsr::centerline::CenterlineOptions::default(),
-    )
-    .unwrap();
-    let (b, k) = nearest_centreline_point(&cl, Point3::new(214.5, 121.4, 27.16));
+    let (truth, cl, b, k) = centreline_site("aorta_abdominal_open_ends.stl", [214.5, 121.4, 27.16]);
     let (p, t, r) = (
         cl.branches[b].points[k],
         cl.branches[b].tangent[k].normalize(),
@@ -347,18 +364,8 @@ fn an_occlusion_of_the_open_aorta_carries_the_wall_across_the_gap() {
         center: p,
         radius: 1.5 * r,
     };
-    let dir = tempfile::tempdir().unwrap();
     let region = format!("--region={},{},{},{}", p.x, p.y, p.z, d.radius);
-    let (repaired, report) = repair_by_cli(&damaged, &region, dir.path());
-    assert!(mesh_info(&repaired).watertight);
-    let h = report["parameters"]["voxel"].as_f64().unwrap();
-    let before = hausdorff_in(&damaged, &truth, &[d]) / h;
-    let hd = hausdorff_in(&repaired, &truth, &[d]) / h;
-    let ve = volume_error_in(&repaired, &truth, &[d]);
-    println!(
-        "occluded open aorta: damaged {before:.2}h, repaired {hd:.2}h / {:+.1}% in D",
-        100.0 * ve
-    );
+    let (before, hd, ve) = repair_in(&damaged, &truth, d, &region, "occluded open aorta");
     assert!(before > 5.0, "the occlusion is {before}h deep");
     assert!(hd <= 2.5, "{hd}h");
     assert!(ve.abs() <= 0.02, "{ve}");
