@@ -1,10 +1,14 @@
-//! The Python module `vesselmsr`: the library's repair and mesh I/O on numpy arrays (vertices
-//! (n, 3) float64 or float32, faces (m, 3) integers), built by maturin as an abi3 wheel.
+//! The Python module `vesselmsr`: the library's repair, capping, re-meshing and mesh I/O on numpy
+//! arrays (vertices (n, 3) float64 or float32, faces (m, 3) integers), built by maturin as an
+//! abi3 wheel.
 //!
 //! `repair` runs [`vesselmsr::inpaint::pipeline::repair_vessel`], the same function as
 //! `vesselmsr repair`, and returns its report as a dict equal to the CLI's JSON report (the same
-//! serde struct, through `json.loads`; without the file paths and the `read` timing). The work
-//! runs with the GIL released, so threads (and Dask's threaded workers) repair in parallel.
+//! serde struct, through `json.loads`; without the file paths and the `read` timing). `cap` runs
+//! [`vesselmsr::mesh::cap::cap_mesh`] as `vesselmsr cap` does (its dict is all of `cap --json`),
+//! `remesh` runs [`vesselmsr::levelset::remesh::remesh_mesh`], the work of `vesselmsr remesh`
+//! (its dict is `remesh --json` without the timings). The work runs with the GIL released, so
+//! threads (and Dask's threaded workers) repair in parallel.
 //! Arrays are checked before anything runs (shape, dtype, indices in range, finite coordinates,
 //! a usable triangle); the library's errors become `ValueError` (bad options and arrays),
 //! `OSError` (files) or `vesselmsr.VesselmsrError` (a subclass of `ValueError`: the mesh could
@@ -19,9 +23,12 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyString};
 use std::ffi::CString;
 use std::path::PathBuf;
+use vesselmsr::grid::GridOptions;
 use vesselmsr::inpaint::pipeline::{repair_vessel, RepairEvent, VesselRepair};
 use vesselmsr::inpaint::region::Ball;
 use vesselmsr::inpaint::repair::{InpaintMethod, RepairOptions};
+use vesselmsr::levelset::remesh::{remesh_mesh, RemeshEvent, RemeshOptions};
+use vesselmsr::mesh::cap::{cap_mesh, CapOptions};
 use vesselmsr::{Error, TriMesh};
 
 create_exception!(
@@ -174,7 +181,7 @@ fn mesh_from(vertices: &Bound<'_, PyAny>, faces: &Bound<'_, PyAny>) -> PyResult<
 /// A mesh as numpy arrays: vertices float64 (n, 3), faces int64 (m, 3).
 type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
 
-/// What `repair` returns: the repaired mesh's arrays and the report dict.
+/// What `repair`, `cap` and `remesh` return: the mesh's arrays and the report dict.
 type Repaired<'py> = (
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray2<i64>>,
@@ -350,6 +357,116 @@ fn repair<'py>(
     Ok((v, f, from_json(py, &text)?))
 }
 
+/// Closes every boundary loop as `vesselmsr cap` does and returns (vertices, faces, report).
+///
+/// vertices: (n, 3) float64 or float32; faces: (m, 3) integers (vertex indices from 0).
+/// target_edge: target edge length of the cap triangles, in the mesh's units (None: the mean
+/// length of each loop's own edges), as --target-edge.
+/// orient: fix triangles wound against their neighbours and face the result outward (the
+/// default); False keeps the input's winding (--no-orient).
+///
+/// Coincident vertices are merged first (a triangle soup becomes the surface it describes). The
+/// result is watertight or VesselmsrError is raised. Returns vertices float64 (n', 3), faces
+/// int64 (m', 3) and the report as a dict, equal to what `vesselmsr cap --json` prints (input,
+/// cap, output, inconsistent_faces_flipped; that JSON has no file path or timing). The notices
+/// are VesselmsrWarning warnings. The GIL is released meanwhile.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, *, target_edge=None, orient=true))]
+fn cap<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    target_edge: Option<f64>,
+    orient: bool,
+) -> PyResult<Repaired<'py>> {
+    let opts = CapOptions {
+        target_edge_length: target_edge,
+        orient_outward: orient,
+        ..CapOptions::default()
+    };
+    let mesh = mesh_from(vertices, faces)?;
+    let mut notices = Vec::new();
+    let outcome = py.detach(|| {
+        cap_mesh(&mesh, &opts, &mut |merged| {
+            notices.push(format!(
+                "{merged} vertices at the same position as another were merged"
+            ))
+        })
+        .and_then(|done| {
+            let text = serde_json::to_string(&done)
+                .map_err(|e| Error::Geometry(format!("report: {e}")))?;
+            Ok((done, text))
+        })
+    });
+    warn_all(py, &notices)?;
+    let (done, text) = outcome.map_err(py_error)?;
+    warn_all(py, &done.notices())?;
+    let (v, f) = arrays_of(py, &done.mesh)?;
+    Ok((v, f, from_json(py, &text)?))
+}
+
+/// Re-meshes through the level set as `vesselmsr remesh` does and returns (vertices, faces,
+/// report): the zero level set of the mesh's signed distance grid by marching cubes, projected
+/// onto the input; a closed, manifold, outward mesh at the grid's resolution.
+///
+/// vertices: (n, 3) float64 or float32; faces: (m, 3) integers (vertex indices from 0).
+/// voxel: voxel edge length in the mesh's units, or resolution: cells along the longest side of
+/// the bounding box (not both; neither: min(mean edge / 2, longest side / 256)), as --voxel and
+/// --resolution.
+/// project: move the vertices onto the input and split the edges still off it (the default);
+/// False keeps the marching-cubes surface (--no-project).
+/// decimate: True (0.5 voxel) or a number of voxels: simplify the output within that Hausdorff
+/// distance (None or False: not simplified), as --decimate.
+/// max_memory: the grid's memory limit, bytes or a size such as "8G" (None: the CLI's default),
+/// as --max-memory.
+///
+/// Returns vertices float64 (n', 3), faces int64 (m', 3) and the report as a dict: what
+/// `vesselmsr remesh --json` prints (grid, output, cavities_joined, edges_split, decimate)
+/// without its timings. Notices are VesselmsrWarning warnings. The GIL is released meanwhile.
+#[pyfunction]
+#[pyo3(signature = (vertices, faces, *, voxel=None, resolution=None, project=true,
+    decimate=None, max_memory=None))]
+fn remesh<'py>(
+    py: Python<'py>,
+    vertices: &Bound<'py, PyAny>,
+    faces: &Bound<'py, PyAny>,
+    voxel: Option<f64>,
+    resolution: Option<usize>,
+    project: bool,
+    decimate: Option<&Bound<'py, PyAny>>,
+    max_memory: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Repaired<'py>> {
+    let opts = RemeshOptions {
+        grid: GridOptions {
+            voxel,
+            resolution,
+            max_memory_bytes: max_memory_from(max_memory)?,
+            ..GridOptions::default()
+        },
+        project,
+        decimate: flag_or_number(decimate, "decimate", 0.5)?,
+    };
+    opts.validate().map_err(py_error)?;
+    let mesh = mesh_from(vertices, faces)?;
+    let mut notices = Vec::new();
+    let outcome = py.detach(|| {
+        remesh_mesh(&mesh, &opts, &mut |event| {
+            if let RemeshEvent::Notice(text) = event {
+                notices.push(text.to_string());
+            }
+        })
+        .and_then(|done| {
+            let text = serde_json::to_string(&done.report)
+                .map_err(|e| Error::Geometry(format!("report: {e}")))?;
+            Ok((done, text))
+        })
+    });
+    warn_all(py, &notices)?;
+    let (done, text) = outcome.map_err(py_error)?;
+    let (v, f) = arrays_of(py, &done.mesh)?;
+    Ok((v, f, from_json(py, &text)?))
+}
+
 /// Reads a mesh file (.stl, .obj, .ply, .vtp, .vtk) as (vertices float64 (n, 3), faces int64
 /// (m, 3)), checked as the CLI checks it.
 #[pyfunction]
@@ -391,7 +508,7 @@ fn mesh_info<'py>(
 }
 
 /// Repairs triangulated blood-vessel surfaces (level-set multiscale representation and
-/// inpainting) on numpy arrays: repair, read_mesh, write_mesh, mesh_info.
+/// inpainting) on numpy arrays: repair, cap, remesh, read_mesh, write_mesh, mesh_info.
 #[pymodule]
 #[pyo3(name = "vesselmsr")]
 fn vesselmsr_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -400,6 +517,8 @@ fn vesselmsr_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("VesselmsrError", py.get_type::<VesselmsrError>())?;
     m.add("VesselmsrWarning", py.get_type::<VesselmsrWarning>())?;
     m.add_function(wrap_pyfunction!(repair, m)?)?;
+    m.add_function(wrap_pyfunction!(cap, m)?)?;
+    m.add_function(wrap_pyfunction!(remesh, m)?)?;
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(mesh_info, m)?)?;

@@ -1,12 +1,10 @@
-//! `vesselmsr cap MESH -o OUT`: close every boundary loop and write a watertight, outward mesh.
+//! `vesselmsr cap MESH -o OUT`: close every boundary loop and write a watertight, outward mesh
+//! (the work is the library's `mesh::cap::cap_mesh`, which the Python package's `cap` calls too).
 
 use super::outputs::Outputs;
 use super::{print_json, progress, Context};
 use crate::io::{read_mesh, write_mesh, MeshFormat};
-use crate::mesh::cap::{cap_holes, CapOptions, CapReport};
-use crate::mesh::info::{mesh_info, MeshInfo};
-use crate::mesh::orient::orient_consistently;
-use crate::mesh::weld::weld_coincident;
+use crate::mesh::cap::{cap_mesh, CapOptions, CappedMesh};
 use anyhow::Context as _;
 use std::path::PathBuf;
 
@@ -30,14 +28,6 @@ pub struct CapArgs {
     pub no_orient: bool,
 }
 
-#[derive(serde::Serialize)]
-struct CapOutput<'a> {
-    input: &'a MeshInfo,
-    cap: &'a CapReport,
-    output: &'a MeshInfo,
-    inconsistent_faces_flipped: usize,
-}
-
 pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
     if let Some(l) = args.target_edge {
         anyhow::ensure!(
@@ -51,58 +41,33 @@ pub fn run(ctx: &Context, args: &CapArgs) -> anyhow::Result<()> {
     let orient = !args.no_orient;
     let bar = progress::spinner(ctx.quiet, "capping boundary loops");
     let mesh = read_mesh(&args.mesh)?;
-    // A triangle soup (corners not shared) would be "capped" triangle by triangle into
-    // back-to-back pairs: weld it into the surface it describes, as an STL reader would.
-    let (mut mesh, merged) = weld_coincident(&mesh);
-    if merged > 0 {
-        ctx.notice(&format!(
-            "{}: {merged} vertices at the same position as another were merged",
-            args.mesh.display()
-        ));
-    }
-    let input = mesh_info(&mesh);
-    let inconsistent_faces_flipped = if orient {
-        orient_consistently(&mut mesh)
-    } else {
-        0
-    };
     let opts = CapOptions {
         target_edge_length: args.target_edge,
         orient_outward: orient,
         ..Default::default()
     };
-    let (capped, report) = cap_holes(&mesh, &opts)
-        .with_context(|| format!("{}: capping failed", args.mesh.display()))?;
-    let output = mesh_info(&capped);
-    // The promise of `cap` is a watertight mesh: refuse to write anything else. Defects that
-    // capping cannot mend (non-manifold edges or vertices of the input) end up here.
-    if !output.watertight {
-        anyhow::bail!(
-            "{}: capping could not make the mesh watertight: {} (input: {})",
-            args.mesh.display(),
-            output.leaks().join(", "),
-            input.leaks().join(", ")
-        );
-    }
-    outputs.write(&args.output, |p| write_mesh(p, &capped))?;
+    let capped = cap_mesh(&mesh, &opts, &mut |merged| {
+        ctx.notice(&format!(
+            "{}: {merged} vertices at the same position as another were merged",
+            args.mesh.display()
+        ))
+    })
+    .with_context(|| args.mesh.display().to_string())?;
+    outputs.write(&args.output, |p| write_mesh(p, &capped.mesh))?;
     outputs.commit()?;
     bar.finish_and_clear();
-    for m in &report.messages {
-        ctx.notice(m);
-    }
-    if inconsistent_faces_flipped > 0 {
-        ctx.notice(&format!(
-            "{inconsistent_faces_flipped} triangles were wound against their neighbours and were flipped"
-        ));
+    for m in capped.notices() {
+        ctx.notice(&m);
     }
     if ctx.json {
-        return print_json(&CapOutput {
-            input: &input,
-            cap: &report,
-            output: &output,
-            inconsistent_faces_flipped,
-        });
+        return print_json(&capped);
     }
+    let CappedMesh {
+        input,
+        cap: report,
+        output,
+        ..
+    } = &capped;
     println!(
         "{}: {} boundary loop(s), orientation {}",
         args.mesh.display(),

@@ -3,6 +3,7 @@
 //! both commands take with them (read the mesh, size its grid, voxelize it).
 
 use super::{progress, Context};
+pub use crate::grid::spec::GridJson;
 use crate::grid::spec::GridOptions;
 use crate::grid::{grid_for_mesh, Grid3, GridSpec};
 use crate::io::read_mesh;
@@ -31,24 +32,6 @@ impl GridArgs {
             resolution: self.resolution,
             max_memory_bytes: ctx.max_memory,
             ..GridOptions::default()
-        }
-    }
-}
-
-/// The grid layout as the JSON outputs print it.
-#[derive(serde::Serialize)]
-pub struct GridJson {
-    pub dims: [usize; 3],
-    pub voxel: f64,
-    pub origin: [f64; 3],
-}
-
-impl GridJson {
-    pub fn of(spec: &crate::grid::GridSpec) -> Self {
-        GridJson {
-            dims: spec.dims,
-            voxel: spec.transform.voxel,
-            origin: spec.transform.origin,
         }
     }
 }

@@ -2,19 +2,16 @@
 //! cubes (enclosed cavities the input does not have reopened), vertices then projected onto the
 //! input and edges split where the surface is still off it: a closed, manifold, outward mesh at
 //! the grid's resolution (open ends come out closed); `--decimate` then simplifies it within half
-//! a voxel (`mesh::decimate`).
+//! a voxel (`mesh::decimate`). The work after voxelization is the library's
+//! `levelset::remesh::remesh_levelset`, which the Python package's `remesh` calls too.
 
-use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::grid_args::{load_and_voxelize, GridArgs, Voxelized};
 use super::outputs::Outputs;
 use super::{print_json, Context};
-use crate::bvh::MeshBvh;
 use crate::io::{write_mesh, MeshFormat};
-use crate::levelset::cavity::{extract_joining_cavities, find_cavities, CavityOptions};
-use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
-use crate::levelset::project::{project_vertices, ProjectOptions};
-use crate::levelset::refine::{refine_to_surface, remesh_refine_options, RefineReport};
-use crate::mesh::decimate::{decimate_mesh, DecimateOptions, DecimateReport};
-use crate::mesh::info::{mesh_info, MeshInfo};
+use crate::levelset::remesh::{
+    remesh_levelset, RemeshEvent, RemeshOptions, RemeshReport, Remeshed,
+};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -50,15 +47,9 @@ struct Timings {
 
 #[derive(serde::Serialize)]
 pub(super) struct RemeshOutput {
-    grid: GridJson,
-    output: MeshInfo,
-    /// Enclosed cavities of the extraction reopened to the outside (folds narrower than h).
-    cavities_joined: usize,
-    /// Edges split to bring the surface within 0.05 voxel of the input.
-    edges_split: usize,
-    /// The simplification of `--decimate`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    decimate: Option<DecimateReport>,
+    /// grid, output, cavities_joined, edges_split and decimate (when asked for).
+    #[serde(flatten)]
+    report: RemeshReport,
     timings: Timings,
 }
 
@@ -67,13 +58,13 @@ pub fn run(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<()> {
     if ctx.json {
         return print_json(&out);
     }
-    let [nx, ny, nz] = out.grid.dims;
+    let [nx, ny, nz] = out.report.grid.dims;
     println!(
         "{}: {nx}×{ny}×{nz} grid, voxel {} (file units)",
         args.output.display(),
-        out.grid.voxel
+        out.report.grid.voxel
     );
-    println!("{}", out.output);
+    println!("{}", out.report.output);
     Ok(())
 }
 
@@ -92,80 +83,38 @@ pub(super) fn remesh_file(ctx: &Context, args: &RemeshArgs) -> anyhow::Result<Re
     let Voxelized {
         mesh,
         spec,
-        mut phi,
+        phi,
         read_s: read,
         voxelize_s,
         bar,
         ..
     } = load_and_voxelize(ctx, &args.mesh, &args.grid)?;
-    bar.set_message("extracting the surface");
-    let t = Instant::now();
-    // A fold narrower than the voxel can enclose a bubble of outside the input does not have:
-    // reopen it (only when the input has no cavity of its own).
-    let extract = ExtractOptions::default();
-    let (mut surface, cavities_joined) = if find_cavities(&mesh).is_empty() {
-        extract_joining_cavities(&mut phi, &extract, &CavityOptions::default())?
-    } else {
-        (extract_surface(&phi, &extract)?, 0)
+    let opts = RemeshOptions {
+        project: !args.no_project,
+        decimate: args.decimate,
+        ..RemeshOptions::default()
     };
-    if cavities_joined > 0 {
-        bar.suspend(|| {
-            ctx.notice(&format!(
-                "reopened {cavities_joined} fold(s) of the input that closed into an enclosed \
-                 cavity at this voxel size"
-            ))
-        });
-    }
-    let mc = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let mut refined = RefineReport::default();
-    if !args.no_project {
-        bar.set_message("projecting onto the input");
-        let opts = ProjectOptions {
-            max_distance: spec.voxel(),
-            ..Default::default()
-        };
-        let bvh = MeshBvh::new(&mesh);
-        project_vertices(&mut surface, &mesh, &bvh, &opts);
-        bar.set_message("refining towards the input");
-        refined = refine_to_surface(
-            &mut surface,
-            &mesh,
-            &bvh,
-            &remesh_refine_options(spec.voxel()),
-        );
-    }
-    let project = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let decimate = args.decimate.map(|voxels| {
-        bar.set_message("decimating");
-        let opts = DecimateOptions {
-            max_distance: voxels * spec.voxel(),
-            ..DecimateOptions::default()
-        };
-        let (lean, report) = decimate_mesh(&surface, &opts);
-        surface = lean;
-        report
-    });
-    let decimate_s = t.elapsed().as_secs_f64();
-    let output = mesh_info(&surface);
+    let Remeshed {
+        mesh: surface,
+        report,
+        timings,
+    } = remesh_levelset(&mesh, &spec, phi, &opts, &mut |event| match event {
+        RemeshEvent::Stage(stage) => bar.set_message(stage),
+        RemeshEvent::Notice(text) => bar.suspend(|| ctx.notice(text)),
+    })?;
     let t = Instant::now();
     outputs.write(&args.output, |p| write_mesh(p, &surface))?;
     outputs.commit()?;
     let write = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let out = RemeshOutput {
-        grid: GridJson::of(&spec),
-        output,
-        cavities_joined,
-        edges_split: refined.edges_split,
-        decimate,
+        report,
         timings: Timings {
             read,
             voxelize: voxelize_s,
-            marching_cubes: mc,
-            project,
-            decimate: decimate_s,
+            marching_cubes: timings.marching_cubes,
+            project: timings.project,
+            decimate: timings.decimate,
             write,
         },
     };

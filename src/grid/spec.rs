@@ -90,6 +90,25 @@ impl GridSpec {
     }
 }
 
+/// The grid layout as the JSON outputs print it (the CLI's level-set commands, the Python
+/// package's `remesh`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GridJson {
+    pub dims: [usize; 3],
+    pub voxel: f64,
+    pub origin: [f64; 3],
+}
+
+impl GridJson {
+    pub fn of(spec: &GridSpec) -> Self {
+        GridJson {
+            dims: spec.dims,
+            voxel: spec.transform.voxel,
+            origin: spec.transform.origin,
+        }
+    }
+}
+
 /// Bytes held by `grids` f32 grids of `dims` nodes: `grids × (4·nodes + size_of::<Grid3>())`,
 /// saturating at `u64::MAX`.
 pub fn grid_memory_bytes(dims: [usize; 3], grids: usize) -> u64 {

@@ -22,15 +22,20 @@
 //! direction, which is how the adjacent mesh triangles traverse the rim, so a consistently
 //! oriented input gives a consistently oriented closed output; the result is finally flipped as a
 //! whole if its enclosed volume is negative.
+//!
+//! [`cap_mesh`] (`watertight`) is the whole of `vesselmsr cap` around [`cap_holes`]: welding,
+//! consistent winding, and the refusal of a result that is not watertight.
 
 mod fan;
 mod fill;
 mod harmonic;
 mod improve;
 mod planar;
+mod watertight;
 mod weld;
 
 pub use fan::cap_loops_with_fans;
+pub use watertight::{cap_mesh, CappedMesh};
 
 use super::measures::{signed_volume, triangle_aspect_ratio};
 use super::topology::boundary_loops;
