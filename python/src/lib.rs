@@ -69,6 +69,25 @@ fn warn_all(py: Python<'_>, notices: &[String]) -> PyResult<()> {
     Ok(())
 }
 
+/// Runs `work` with the GIL released, collecting the notices it pushes, then raises them as
+/// warnings; the library's error becomes a Python exception. Returns `work`'s result and its
+/// report as JSON text (`report`, `serde_json::to_string` of the report struct).
+fn detached<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(&mut Vec<String>) -> vesselmsr::Result<T> + Send,
+    report: impl FnOnce(&T) -> serde_json::Result<String> + Send,
+) -> PyResult<(T, String)> {
+    let mut notices = Vec::new();
+    let outcome = py.detach(|| {
+        work(&mut notices).and_then(|done| {
+            let text = report(&done).map_err(|e| Error::Geometry(format!("report: {e}")))?;
+            Ok((done, text))
+        })
+    });
+    warn_all(py, &notices)?;
+    outcome.map_err(py_error)
+}
+
 /// `obj` as a numpy array (any array-like), checked to be 2-D with 3 columns.
 fn as_rows_of_3<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, PyUntypedArray>> {
     let py = obj.py();
@@ -327,21 +346,17 @@ fn repair<'py>(
     };
     request.validate().map_err(py_error)?;
     let mesh = mesh_from(vertices, faces)?;
-    let mut notices = Vec::new();
-    let outcome = py.detach(|| {
-        repair_vessel(&mesh, &request, &mut |event| {
-            if let RepairEvent::Notice(text) = event {
-                notices.push(text.to_string());
-            }
-        })
-        .and_then(|done| {
-            let text = serde_json::to_string(&done.report)
-                .map_err(|e| Error::Geometry(format!("report: {e}")))?;
-            Ok((done, text))
-        })
-    });
-    warn_all(py, &notices)?;
-    let (done, text) = outcome.map_err(py_error)?;
+    let (done, text) = detached(
+        py,
+        |notices| {
+            repair_vessel(&mesh, &request, &mut |event| {
+                if let RepairEvent::Notice(text) = event {
+                    notices.push(text.to_string());
+                }
+            })
+        },
+        |done| serde_json::to_string(&done.report),
+    )?;
     let mut later: Vec<String> = done
         .repair_notices
         .iter()
@@ -385,21 +400,17 @@ fn cap<'py>(
         ..CapOptions::default()
     };
     let mesh = mesh_from(vertices, faces)?;
-    let mut notices = Vec::new();
-    let outcome = py.detach(|| {
-        cap_mesh(&mesh, &opts, &mut |merged| {
-            notices.push(format!(
-                "{merged} vertices at the same position as another were merged"
-            ))
-        })
-        .and_then(|done| {
-            let text = serde_json::to_string(&done)
-                .map_err(|e| Error::Geometry(format!("report: {e}")))?;
-            Ok((done, text))
-        })
-    });
-    warn_all(py, &notices)?;
-    let (done, text) = outcome.map_err(py_error)?;
+    let (done, text) = detached(
+        py,
+        |notices| {
+            cap_mesh(&mesh, &opts, &mut |merged| {
+                notices.push(format!(
+                    "{merged} vertices at the same position as another were merged"
+                ))
+            })
+        },
+        |done| serde_json::to_string(done),
+    )?;
     warn_all(py, &done.notices())?;
     let (v, f) = arrays_of(py, &done.mesh)?;
     Ok((v, f, from_json(py, &text)?))
@@ -448,21 +459,17 @@ fn remesh<'py>(
     };
     opts.validate().map_err(py_error)?;
     let mesh = mesh_from(vertices, faces)?;
-    let mut notices = Vec::new();
-    let outcome = py.detach(|| {
-        remesh_mesh(&mesh, &opts, &mut |event| {
-            if let RemeshEvent::Notice(text) = event {
-                notices.push(text.to_string());
-            }
-        })
-        .and_then(|done| {
-            let text = serde_json::to_string(&done.report)
-                .map_err(|e| Error::Geometry(format!("report: {e}")))?;
-            Ok((done, text))
-        })
-    });
-    warn_all(py, &notices)?;
-    let (done, text) = outcome.map_err(py_error)?;
+    let (done, text) = detached(
+        py,
+        |notices| {
+            remesh_mesh(&mesh, &opts, &mut |event| {
+                if let RemeshEvent::Notice(text) = event {
+                    notices.push(text.to_string());
+                }
+            })
+        },
+        |done| serde_json::to_string(&done.report),
+    )?;
     let (v, f) = arrays_of(py, &done.mesh)?;
     Ok((v, f, from_json(py, &text)?))
 }
