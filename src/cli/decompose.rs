@@ -14,10 +14,11 @@
 //! leaves no output.
 
 use super::evolve::{pad_for_motion, MotionRoom, VelocityName};
-use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::grid_args::{load_and_voxelize, GridArgs, Voxelized};
 use super::outputs::Outputs;
 use super::{print_json, Context};
 use crate::grid::spec::grid_memory_bytes;
+use crate::grid::spec::GridJson;
 use crate::io::write_mesh_with_scalars;
 use crate::mesh::distance::SurfaceDistanceOptions;
 use crate::motion::Velocity;

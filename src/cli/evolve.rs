@@ -10,9 +10,10 @@
 //! travels under mean curvature flow in time T. Nothing is written when the evolution fails (e.g.
 //! the shape vanishes before T).
 
-use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::grid_args::{load_and_voxelize, GridArgs, Voxelized};
 use super::outputs::Outputs;
 use super::{print_json, Context};
+use crate::grid::spec::GridJson;
 use crate::grid::spec::{format_bytes, grid_memory_bytes, GridOptions};
 use crate::grid::{Grid3, GridSpec};
 use crate::io::{write_mesh, MeshFormat};

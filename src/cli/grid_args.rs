@@ -3,7 +3,6 @@
 //! both commands take with them (read the mesh, size its grid, voxelize it).
 
 use super::{progress, Context};
-pub use crate::grid::spec::GridJson;
 use crate::grid::spec::GridOptions;
 use crate::grid::{grid_for_mesh, Grid3, GridSpec};
 use crate::io::read_mesh;

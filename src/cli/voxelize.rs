@@ -1,9 +1,10 @@
 //! `vesselmsr voxelize MESH -o PHI.npy|PHI.vti|PHI.nrrd`: the signed distance grid φ of a mesh (negative
 //! inside), exact near the surface and redistanced by fast sweeping elsewhere.
 
-use super::grid_args::{load_and_voxelize, GridArgs, GridJson, Voxelized};
+use super::grid_args::{load_and_voxelize, GridArgs, Voxelized};
 use super::outputs::Outputs;
 use super::{print_json, Context};
+use crate::grid::spec::GridJson;
 use crate::io::{write_npy, write_nrrd, write_vti};
 use crate::levelset::redistance::{redistance, RedistanceOptions};
 use crate::levelset::voxelize::VoxelizeOptions;

@@ -21,10 +21,10 @@
 //! bandwidth 2 × rays), solved by banded Cholesky: O(unknowns × rays²), a few milliseconds for
 //! a hole's few thousand cells, where conjugate gradients needed thousands of iterations.
 
-/// The Laplacian of `values` (sample-major, `m` angles per sample) on the chart: periodic in
-/// angle with `spacing[i]` (world units) between neighbouring angles at sample i, arc length
-/// `arc` along; the first and last samples see only their one neighbour (no flux). Returns the
-/// stencil of cell (i, j) as (cell, weight) pairs, the cell itself first.
+/// The stencil of the chart's Laplacian at cell (i, j) (cells sample-major, `m` angles per
+/// sample): periodic in angle with `spacing[i]` (world units) between neighbouring angles at
+/// sample i, arc length `arc` along; the first and last samples see only their one neighbour
+/// (no flux). (cell, weight) pairs, the cell itself first.
 fn stencil(i: usize, j: usize, arc: &[f64], spacing: &[f64], m: usize) -> Vec<(usize, f64)> {
     let n = arc.len();
     let c = i * m + j;
