@@ -378,13 +378,20 @@ fn real_coronary_stenosis_gets_a_tube_like_lumen_and_a_degree() {
     assert!(mesh_info(&r.mesh).watertight);
     assert_manifold3d(&r.mesh);
     assert_outside_kept(&r.closed_input, &r.mesh, &[ball]);
-    let reports = vesselmsr::report::repair_report::region_reports(
-        &r.closed_input,
-        &r.mesh,
-        &[ball],
-        &["region".into()],
-        None,
-    );
+    let measure = |windings| {
+        vesselmsr::report::repair_report::region_reports(
+            &r.closed_input,
+            &r.mesh,
+            &[ball],
+            &["region".into()],
+            None,
+            windings,
+        )
+    };
+    // The winding numbers the self-checks built measure what fresh ones do.
+    let (win_in, win_out) = r.windings.as_ref().expect("the stitch was checked");
+    let reports = measure(Some([win_in, win_out]));
+    assert_eq!(reports, measure(None));
     let g = &reports[0];
     println!(
         "coronary: inpainted {:.3} mm³ ({:.2}%), diameter stenosis {:?}%, area {:?}%, NASCET {:?}%, min input diameter {:?} mm, output {:?} mm",

@@ -29,7 +29,11 @@
 //! numbers at order 4), and a far node costs one square root and about two multiplications per
 //! coefficient. The moments are exact for flat triangles: the mean of (y·d)^k over a triangle
 //! with corners a, b, c is 2/((k+1)(k+2)) · h_k(a·d, b·d, c·d), h_k the complete homogeneous
-//! symmetric polynomial of degree k.
+//! symmetric polynomial of degree k. A node of at most 16 triangles sums its moments over them;
+//! a larger one translates its two children's to its own centre (with y = y′ + δ,
+//! mean((y·d)^k) = Σ_j C(k, j)(δ·d)^(k−j) mean((y′·d)^j)), so building the expansions visits each
+//! triangle a few times instead of once per level of the hierarchy (0.26 s → 0.13 s on a
+//! repaired vessel of 64,000 triangles, 2 threads).
 //!
 //! Accuracy (max |fast − exact| over 10,000 points per real mesh, half in the bounding box grown
 //! by 20 %, half within two mean edges of the surface; worst of the project's six meshes) and
@@ -270,15 +274,15 @@ fn subtree_slots(bvh: &MeshBvh, node: usize, out: &mut Vec<usize>) {
     }
 }
 
-/// Expansion of the triangles in `slots` up to order `order` (at most `MAX_ORDER`), far-field
-/// radius factor `beta`; its coefficients are appended to `coef`.
-fn node_expansion(
-    bvh: &MeshBvh,
-    slots: &[usize],
-    beta: f64,
-    order: usize,
-    coef: &mut Vec<f64>,
-) -> FarField {
+/// Per component i of the normal, the polynomials Σ_t a_t n_t,i · mean_t((y·d)^k) of d for
+/// k = 0..=MAX_ORDER (degree k at `start(k)..start(k + 1)`), y relative to a node's centre.
+type Moments = [[f64; MOMENTS_LEN]; 3];
+const MOMENTS_LEN: usize = start(MAX_ORDER + 1);
+
+/// A node's centre (area-weighted centroid of its triangles, world units), the squared largest
+/// distance from it to a corner, and its moments about it up to order `order`, summed over the
+/// triangles in `slots` directly.
+fn node_moments(bvh: &MeshBvh, slots: &[usize], order: usize) -> (Vector3<f64>, f64, Moments) {
     // Work relative to the first corner so moments keep their precision far from the origin.
     let base = bvh.tris[slots[0]][0].coords;
     let mut area = 0.0;
@@ -300,7 +304,7 @@ fn node_expansion(
 
     // moments[i], for every k ≤ order (degree k at start(k)..start(k + 1)): the polynomial
     // Σ_t a_t n_t,i · mean_t((y·d)^k) of d, i.e. C^k_i(d, …, d).
-    const LEN: usize = start(MAX_ORDER + 1);
+    const LEN: usize = MOMENTS_LEN;
     let mut moments = [[0.0; LEN]; 3];
     let mut r2max: f64 = 0.0;
     for &s in slots {
@@ -343,7 +347,43 @@ fn node_expansion(
             }
         }
     }
+    (local_center + base, r2max, moments)
+}
 
+/// Adds to `parent` the moments `child` taken about a centre `delta` away from the child's
+/// (`delta` = child's centre − parent's): with y = y′ + δ,
+/// mean((y·d)^k) = Σ_(j ≤ k) C(k, j) (δ·d)^(k−j) mean((y′·d)^j), so a node's moments follow from
+/// its children's without visiting their triangles again.
+fn translate_moments_add(
+    child: &Moments,
+    delta: &Vector3<f64>,
+    order: usize,
+    parent: &mut Moments,
+) {
+    for (c, p) in child.iter().zip(parent.iter_mut()) {
+        for j in 0..=order {
+            // t = (δ·d)^(k−j) · M_j, raised one degree at a time.
+            let mut t = [0.0; MOMENTS_LEN];
+            t[..num_mono(j)].copy_from_slice(&c[start(j)..start(j + 1)]);
+            let mut binom = 1.0;
+            for k in j..=order {
+                if k > j {
+                    let mut next = [0.0; MOMENTS_LEN];
+                    mul_linear_add(&t, k - 1, delta, &mut next);
+                    t = next;
+                    binom = binom * k as f64 / (k - j) as f64;
+                }
+                for (x, y) in p[start(k)..start(k + 1)].iter_mut().zip(&t) {
+                    *x += binom * y;
+                }
+            }
+        }
+    }
+}
+
+/// Appends to `coef` the coefficients of P_1 … P_(order+1) (see the module documentation) of a
+/// node with these moments.
+fn expansion_coefficients(moments: &Moments, order: usize, coef: &mut Vec<f64>) {
     // Q_k(d) = Σ_i d_i C^k_i(d, …, d), then P_(k+1) (see the module documentation).
     const QLEN: usize = start(MAX_ORDER + 2);
     let axes = [Vector3::x(), Vector3::y(), Vector3::z()];
@@ -386,12 +426,138 @@ fn node_expansion(
         }
         coef.extend_from_slice(&p[..num_mono(n)]);
     }
-    FarField {
-        center: local_center + base,
-        far2: beta.max(1.0).powi(2) * r2max,
-        first: 0,
-        count: 0,
+}
+
+/// Nodes with at most this many triangles sum their moments over the triangles; larger ones
+/// translate their children's (the same moments, up to rounding, at a cost that no longer grows
+/// with the depth of the hierarchy).
+const DIRECT_MAX_TRIANGLES: usize = 16;
+
+/// Every node's far-field record and expansion coefficients (`coef_len(order)` per node, in node
+/// order): nodes of at most `direct_max` triangles from their triangles, the others by
+/// translating their children's moments.
+fn build_expansions(
+    bvh: &MeshBvh,
+    beta: f64,
+    order: usize,
+    direct_max: usize,
+) -> (Vec<FarField>, Vec<f64>) {
+    let nodes = &bvh.bvh.nodes;
+    // Children after their parent (pre-order), and each node's triangle count.
+    let mut pre = Vec::with_capacity(nodes.len());
+    let mut parent = vec![0usize; nodes.len()];
+    let mut stack = vec![0usize];
+    while let Some(n) = stack.pop() {
+        pre.push(n);
+        if !nodes[n].is_leaf() {
+            for c in [0, 1].map(|k| nodes[n].first_index as usize + k) {
+                parent[c] = n;
+                stack.push(c);
+            }
+        }
     }
+    let mut count = vec![0usize; nodes.len()];
+    for &n in pre.iter().rev() {
+        let nd = &nodes[n];
+        count[n] = if nd.is_leaf() {
+            nd.prim_count as usize
+        } else {
+            count[nd.first_index as usize] + count[nd.first_index as usize + 1]
+        };
+    }
+    let direct = |n: usize| count[n] <= direct_max;
+    let children = |n: usize| {
+        let f = nodes[n].first_index as usize;
+        [f, f + 1]
+    };
+    let far2 = |r2max: f64| beta.max(1.0).powi(2) * r2max;
+    let record = |n: usize, center: Vector3<f64>, r2max: f64| FarField {
+        center,
+        far2: far2(r2max),
+        first: nodes[n].first_index,
+        count: nodes[n].prim_count,
+    };
+    // The small nodes from their triangles; those under a large parent keep their moments.
+    let small: Vec<(usize, FarField, Vec<f64>, Option<Box<Moments>>)> = pre
+        .par_iter()
+        .copied()
+        .filter(|&n| direct(n))
+        .map_init(Vec::new, |slots, n| {
+            subtree_slots(bvh, n, slots);
+            let (center, r2max, moments) = node_moments(bvh, slots, order);
+            let mut c = Vec::with_capacity(coef_len(order));
+            expansion_coefficients(&moments, order, &mut c);
+            let frontier = n != 0 && !direct(parent[n]);
+            (
+                n,
+                record(n, center, r2max),
+                c,
+                frontier.then(|| Box::new(moments)),
+            )
+        })
+        .collect();
+    let mut far = vec![record(0, Vector3::zeros(), 0.0); nodes.len()];
+    let mut coefs = vec![0.0; coef_len(order) * nodes.len()];
+    let len = coef_len(order);
+    let mut kept: std::collections::HashMap<usize, Box<Moments>> = std::collections::HashMap::new();
+    for (n, f, c, m) in small {
+        far[n] = f;
+        coefs[n * len..(n + 1) * len].copy_from_slice(&c);
+        if let Some(m) = m {
+            kept.insert(n, m);
+        }
+    }
+    // The large nodes, children first: the area-weighted centre from the children's, the
+    // moments translated there, the radius over the subtree's corners.
+    let mut area = vec![0.0; nodes.len()];
+    let mut corners_sum = vec![Vector3::zeros(); nodes.len()];
+    for &n in pre.iter().rev() {
+        let (a, v) = if nodes[n].is_leaf() {
+            let s = nodes[n].first_index as usize;
+            bvh.tris[s..s + nodes[n].prim_count as usize].iter().fold(
+                (0.0, Vector3::zeros()),
+                |(a, v), [p, q, r]| {
+                    (
+                        a + 0.5 * (q - p).cross(&(r - p)).norm(),
+                        v + p.coords + q.coords + r.coords,
+                    )
+                },
+            )
+        } else {
+            let [l, r] = children(n);
+            (area[l] + area[r], corners_sum[l] + corners_sum[r])
+        };
+        (area[n], corners_sum[n]) = (a, v);
+    }
+    let mut slots = Vec::new();
+    for &n in pre.iter().rev().filter(|&&n| !direct(n)) {
+        let [l, r] = children(n);
+        let total = area[l] + area[r];
+        let center = if total > 0.0 {
+            (far[l].center * area[l] + far[r].center * area[r]) / total
+        } else {
+            corners_sum[n] / (3.0 * count[n] as f64)
+        };
+        let mut moments = [[0.0; MOMENTS_LEN]; 3];
+        for c in [l, r] {
+            let m = kept
+                .remove(&c)
+                .expect("a child's moments are kept for its parent");
+            translate_moments_add(&m, &(far[c].center - center), order, &mut moments);
+        }
+        subtree_slots(bvh, n, &mut slots);
+        let r2max = slots
+            .iter()
+            .flat_map(|&s| bvh.tris[s].iter())
+            .map(|p| (p.coords - center).norm_squared())
+            .fold(0.0, f64::max);
+        far[n] = record(n, center, r2max);
+        let mut c = Vec::with_capacity(len);
+        expansion_coefficients(&moments, order, &mut c);
+        coefs[n * len..(n + 1) * len].copy_from_slice(&c);
+        kept.insert(n, Box::new(moments));
+    }
+    (far, coefs)
 }
 
 impl WindingNumber {
@@ -404,28 +570,10 @@ impl WindingNumber {
     /// [`WindingNumber::bvh`] to run closest-point or ray queries on the same hierarchy).
     pub fn from_bvh(bvh: MeshBvh, options: WindingOptions) -> Self {
         let order = (options.order as usize).min(MAX_ORDER);
-        let len = coef_len(order);
         let (far, coefs) = if bvh.is_empty() {
             (Vec::new(), Vec::new())
         } else {
-            let per_node: Vec<(FarField, Vec<f64>)> = (0..bvh.bvh.nodes.len())
-                .into_par_iter()
-                .map_init(Vec::new, |slots, n| {
-                    subtree_slots(&bvh, n, slots);
-                    let mut c = Vec::with_capacity(len);
-                    let mut f = node_expansion(&bvh, slots, options.beta, order, &mut c);
-                    let node = &bvh.bvh.nodes[n];
-                    (f.first, f.count) = (node.first_index, node.prim_count);
-                    (f, c)
-                })
-                .collect();
-            let mut coefs = Vec::with_capacity(len * per_node.len());
-            let mut far = Vec::with_capacity(per_node.len());
-            for (f, c) in per_node {
-                far.push(f);
-                coefs.extend(c);
-            }
-            (far, coefs)
+            build_expansions(&bvh, options.beta, order, DIRECT_MAX_TRIANGLES)
         };
         WindingNumber {
             bvh,
@@ -494,5 +642,61 @@ impl WindingNumber {
     /// [`WindingNumber::winding_number`] for many points, in parallel (rayon).
     pub fn winding_numbers(&self, ps: &[Point3<f64>]) -> Vec<f64> {
         ps.par_iter().map(|p| self.winding_number(p)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::primitives::icosphere;
+
+    fn eval(order: usize, coef: &[f64], d: &Vector3<f64>) -> f64 {
+        match order {
+            2 => eval_expansion::<2>(coef, d),
+            4 => eval_expansion::<4>(coef, d),
+            _ => eval_expansion::<5>(coef, d),
+        }
+    }
+
+    #[test]
+    fn translated_moments_give_the_expansions_summed_over_the_triangles() {
+        // A bumpy sphere far from the origin (moments keep their precision there too).
+        let mut mesh = icosphere(4, 2.0, Point3::new(150.0, -80.0, 40.0));
+        for (k, v) in mesh.vertices.iter_mut().enumerate() {
+            let bump = 0.05 * ((k * 7919 % 101) as f64 / 101.0 - 0.5);
+            *v += (v.coords - Vector3::new(150.0, -80.0, 40.0)) * bump;
+        }
+        let bvh = MeshBvh::new(&mesh);
+        for order in [2, 4, 5] {
+            let (far, coefs) = build_expansions(&bvh, 3.0, order, usize::MAX);
+            let (far_t, coefs_t) = build_expansions(&bvh, 3.0, order, DIRECT_MAX_TRIANGLES);
+            let len = coef_len(order);
+            let mut translated = 0;
+            for (n, (a, b)) in far.iter().zip(&far_t).enumerate() {
+                assert!((a.center - b.center).norm() < 1e-9, "node {n}");
+                assert!((a.far2 - b.far2).abs() <= 1e-9 * a.far2, "node {n}");
+                assert_eq!((a.first, a.count), (b.first, b.count));
+                let (ca, cb) = (
+                    &coefs[n * len..(n + 1) * len],
+                    &coefs_t[n * len..(n + 1) * len],
+                );
+                // The node's share of the winding number, seen from where its expansion applies.
+                for dir in [
+                    Vector3::x(),
+                    -Vector3::y(),
+                    Vector3::new(1.0, 2.0, -2.0) / 3.0,
+                ] {
+                    let d = dir * a.far2.sqrt() * 1.01;
+                    let (wa, wb) = (eval(order, ca, &d), eval(order, cb, &d));
+                    assert!(
+                        (wa - wb).abs() < 1e-12,
+                        "order {order}, node {n}: {wa} against {wb}"
+                    );
+                }
+                translated += usize::from(ca != cb);
+            }
+            // The large nodes were translated (rounding differs), not summed again.
+            assert!(translated > 0);
+        }
     }
 }

@@ -60,6 +60,8 @@ pub struct RepairChecks<'a> {
     longest_near: f64,
     /// The input's volume inside each ball.
     input_volumes: Vec<f64>,
+    /// The input's fast winding number (the report measures with it again).
+    input_winding: WindingNumber,
 }
 
 impl<'a> RepairChecks<'a> {
@@ -93,11 +95,18 @@ impl<'a> RepairChecks<'a> {
                 .iter()
                 .map(|b| volume_in_ball_with(input, &winding, b))
                 .collect(),
+            input_winding: winding,
         }
     }
 
-    /// Checks `output` (the repaired, closed surface). Err names the first check that failed.
-    pub fn check(&self, output: &TriMesh) -> Result<(), String> {
+    /// The input's fast winding number (default options), built once by [`RepairChecks::new`].
+    pub fn into_input_winding(self) -> WindingNumber {
+        self.input_winding
+    }
+
+    /// Checks `output` (the repaired, closed surface). Err names the first check that failed;
+    /// Ok gives the output's fast winding number (default options), which the checks build.
+    pub fn check(&self, output: &TriMesh) -> Result<WindingNumber, String> {
         let (mean, longest_near) = (self.mean, self.longest_near);
         let volume = signed_volume(output);
         if !(volume > 0.0) {
@@ -161,7 +170,7 @@ impl<'a> RepairChecks<'a> {
                 ));
             }
         }
-        Ok(())
+        Ok(winding)
     }
 }
 
@@ -173,7 +182,9 @@ pub fn check_repaired(
     balls: &[Ball],
     reach: f64,
 ) -> Result<(), String> {
-    RepairChecks::new(input, balls, reach).check(output)
+    RepairChecks::new(input, balls, reach)
+        .check(output)
+        .map(|_| ())
 }
 
 #[cfg(test)]

@@ -61,6 +61,7 @@
 //! blob such as an aneurysm sac), the region is left to the caller (`repair` falls back to the
 //! axial fill there).
 
+use super::adaptive::{sample_adaptive, AdaptiveOptions};
 use super::junction::{junction_point, smooth_min, Branch as AxisBranch};
 use super::region::Ball;
 use super::wall_chart::fill_biharmonic;
@@ -1482,43 +1483,39 @@ impl GuideTube {
 }
 
 /// Replaces `phi` at the nodes inside the balls of the guides by the smallest tube distance
-/// (see the module docs). Returns the number of nodes filled.
+/// (see the module docs): exactly within a few voxels of the tubes' walls, by interpolation
+/// farther from them (`adaptive`). Returns the number of nodes filled.
 pub fn fill_guided(phi: &mut Grid3, balls: &[Ball], guides: &[RegionGuide]) -> usize {
-    let [nx, ny, _] = phi.dims();
-    let t = *phi.transform();
     let mine: Vec<(Ball, usize)> = guides
         .iter()
         .enumerate()
         .flat_map(|(g, guide)| guide.balls.iter().map(move |&b| (balls[b], g)))
         .collect();
-    phi.data_mut()
-        .par_iter_mut()
+    // Exact near the tubes' walls, interpolated deep inside and far outside them.
+    guides
+        .iter()
         .enumerate()
-        .map(|(n, v)| {
-            let p = t.index_to_world(Vector3::new(
-                (n % nx) as f64,
-                ((n / nx) % ny) as f64,
-                (n / (nx * ny)) as f64,
-            ));
-            let Some(&(_, g)) = mine.iter().find(|(b, _)| b.contains(&p)) else {
-                return 0;
+        .map(|(g, guide)| {
+            let own: Vec<Ball> = guide.balls.iter().map(|&b| balls[b]).collect();
+            // A node belongs to the guide of the first ball holding it.
+            let owns =
+                |p: &Point3<f64>| mine.iter().find(|(b, _)| b.contains(p)).map(|m| m.1) == Some(g);
+            let field = |p: &Point3<f64>| {
+                guide
+                    .tubes
+                    .iter()
+                    .zip(&guide.kinds)
+                    .map(|(tube, &kind)| (tube.distance(p), kind))
+                    .fold(f64::INFINITY, |d, (di, kind)| {
+                        // A junction's branches meet in a fillet, as at a carina.
+                        if kind == GuideKind::Junction && d.is_finite() {
+                            smooth_min(d, di, guide.fillet)
+                        } else {
+                            d.min(di)
+                        }
+                    })
             };
-            let guide = &guides[g];
-            let d = guide
-                .tubes
-                .iter()
-                .zip(&guide.kinds)
-                .map(|(tube, &kind)| (tube.distance(&p), kind))
-                .fold(f64::INFINITY, |d, (di, kind)| {
-                    // A junction's branches meet in a fillet, as at a carina.
-                    if kind == GuideKind::Junction && d.is_finite() {
-                        smooth_min(d, di, guide.fillet)
-                    } else {
-                        d.min(di)
-                    }
-                });
-            *v = d as f32;
-            1
+            sample_adaptive(phi, &own, owns, field, &AdaptiveOptions::default())
         })
         .sum()
 }

@@ -3,6 +3,7 @@
 //! the inpainting loop itself (`repair`), and the whole repair of a vessel as the CLI and the
 //! Python package run it (`pipeline`: regions, checks, repair, report).
 
+pub mod adaptive;
 pub mod axial;
 pub mod axis;
 pub mod checks;

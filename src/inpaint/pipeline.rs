@@ -278,6 +278,8 @@ pub fn repair_vessel(
                 },
             );
             result.mesh = lean;
+            // The output's winding number was the undecimated mesh's.
+            result.windings = None;
             Some(done)
         }
         _ => None,
@@ -290,6 +292,7 @@ pub fn repair_vessel(
         &balls,
         &sources,
         healthy.as_ref(),
+        result.windings.as_ref().map(|(i, o)| [i, o]),
     );
     let info = mesh_info(&result.mesh);
     let input_info = mesh_info(&result.closed_input);
@@ -382,5 +385,6 @@ fn unrepaired(mesh: &TriMesh, opts: &RepairOptions) -> Result<Repair> {
         guides: Vec::new(),
         notices: Vec::new(),
         timings: vec![("cap".into(), start.elapsed().as_secs_f64())],
+        windings: None,
     })
 }

@@ -34,7 +34,7 @@ use super::paper::{fill_paper, PaperOptions, DT_VOXELS2};
 use super::region::{deepest_ball, Ball};
 use super::stitch::{cut_out, stitch_patch_checked, CutOut};
 use super::topology::remove_islands;
-use crate::bvh::MeshBvh;
+use crate::bvh::{MeshBvh, WindingNumber};
 use crate::centerline::{compute_centerline, Centerline, CenterlineOptions};
 use crate::grid::{spec::default_voxel, Grid3, GridTransform, SubBox};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
@@ -210,6 +210,10 @@ pub struct Repair {
     pub notices: Vec<String>,
     /// Seconds per phase.
     pub timings: Vec<(String, f64)>,
+    /// The fast winding numbers (default options) of `closed_input` and `mesh` that the
+    /// self-checks built, for the report to measure with; `None` where no check ran (re-meshed
+    /// whole, ends kept open).
+    pub windings: Option<(WindingNumber, WindingNumber)>,
 }
 
 /// Sub-box margin around D beyond the balls, in voxels (the fills that grow the shape add half
@@ -541,23 +545,32 @@ pub fn repair_with_centerline(
     // vessel re-meshed. Every cut depth is tried until a stitch passes the self-checks
     // (`checks`: no face inside the solid, no long stitch edges, outward, no volume lost in D;
     // they need a closed result).
+    let mut checks = None;
     let stitch = opts.keep_outside.then(|| {
-        let checks =
-            (cut.open_edges == 0).then(|| RepairChecks::new(&closed_input, balls, 3.0 * h));
+        checks = (cut.open_edges == 0).then(|| RepairChecks::new(&closed_input, balls, 3.0 * h));
         stitch_patch_checked(
             &cut,
             &patch,
             balls,
             &STITCH_MARGINS_VOXELS.map(|m| m * h),
             |m| match &checks {
-                Some(c) => c.check(m).map_err(|e| format!("self-check failed: {e}")),
-                None => Ok(()),
+                Some(c) => c
+                    .check(m)
+                    .map(Some)
+                    .map_err(|e| format!("self-check failed: {e}")),
+                None => Ok(None),
             },
         )
     });
     let stitched = matches!(stitch, Some(Ok(_)));
+    let mut windings = None;
     let (mesh_out, fallback) = match stitch {
-        Some(Ok(m)) => (m, None),
+        Some(Ok((m, output_winding))) => {
+            windings = checks
+                .map(RepairChecks::into_input_winding)
+                .zip(output_winding);
+            (m, None)
+        }
         other => (
             remesh_whole(&closed_input, &psi, &depth, origin, whole_dims, first, h)?,
             other.and_then(|r| r.err()),
@@ -590,6 +603,7 @@ pub fn repair_with_centerline(
         guides,
         notices,
         timings,
+        windings,
     })
 }
 

@@ -155,25 +155,28 @@ pub fn stitch_patch(
     balls: &[Ball],
     margins: &[f64],
 ) -> Result<TriMesh> {
-    stitch_patch_checked(cut, patch, balls, margins, |_| Ok(())).map_err(Error::Geometry)
+    stitch_patch_checked(cut, patch, balls, margins, |_| Ok(()))
+        .map(|(m, ())| m)
+        .map_err(Error::Geometry)
 }
 
 /// [`stitch_patch`] whose result must also pass `check` (a depth whose stitch fails the check
-/// is passed over like one that does not stitch); Err: the first reason met.
-pub fn stitch_patch_checked(
+/// is passed over like one that does not stitch), with what the check gave; Err: the first
+/// reason met.
+pub fn stitch_patch_checked<T>(
     cut: &CutOut,
     patch: &TriMesh,
     balls: &[Ball],
     margins: &[f64],
-    check: impl Fn(&TriMesh) -> std::result::Result<(), String>,
-) -> std::result::Result<TriMesh, String> {
+    check: impl Fn(&TriMesh) -> std::result::Result<T, String>,
+) -> std::result::Result<(TriMesh, T), String> {
     let mut first_error = None;
     for &margin in margins {
         match stitch_at(cut, patch, balls, margin)
             .map_err(|e| e.to_string())
-            .and_then(|m| check(&m).map(|()| m))
+            .and_then(|m| check(&m).map(|t| (m, t)))
         {
-            Ok(mesh) => return Ok(mesh),
+            Ok(done) => return Ok(done),
             Err(e) => {
                 first_error.get_or_insert(e);
             }

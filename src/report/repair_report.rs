@@ -21,7 +21,7 @@ use serde::Serialize;
 pub const NASCET_OFFSET: f64 = 1.15;
 
 /// One region D of the report.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RegionReport {
     /// Centre, world units.
     pub center: [f64; 3],
@@ -148,24 +148,32 @@ pub fn surface_measures(info: &MeshInfo) -> SurfaceMeasures {
 
 /// The per-region figures for `balls` (with their `sources`), `input` being the measured input
 /// (capped) and `output` the repaired mesh; the stenosis along `healthy` (the input's centreline)
-/// where it has measured points in the region, else across the region's sections.
+/// where it has measured points in the region, else across the region's sections. `windings`:
+/// the input's and output's fast winding numbers (default options) when already built.
 pub fn region_reports(
     input: &TriMesh,
     output: &TriMesh,
     balls: &[Ball],
     sources: &[String],
     healthy: Option<&HealthyVessel>,
+    windings: Option<[&WindingNumber; 2]>,
 ) -> Vec<RegionReport> {
     let opts = WindingOptions::default();
-    let win_in = WindingNumber::new(input, opts);
-    let win_out = WindingNumber::new(output, opts);
+    let built;
+    let [win_in, win_out] = match windings {
+        Some(w) => w,
+        None => {
+            built = [input, output].map(|m| WindingNumber::new(m, opts));
+            [&built[0], &built[1]]
+        }
+    };
     let total = signed_volume(output);
     balls
         .iter()
         .enumerate()
         .map(|(k, ball)| {
-            let vin = volume_in_ball_with(input, &win_in, ball);
-            let vout = volume_in_ball_with(output, &win_out, ball);
+            let vin = volume_in_ball_with(input, win_in, ball);
+            let vout = volume_in_ball_with(output, win_out, ball);
             let along = healthy.and_then(|h| h.measure_in(output, ball));
             let mut report = RegionReport {
                 center: [ball.center.x, ball.center.y, ball.center.z],
@@ -200,9 +208,9 @@ pub fn region_reports(
             }
             let stenosis = measure_stenosis_with(
                 input,
-                &win_in,
+                win_in,
                 output,
-                &win_out,
+                win_out,
                 ball,
                 &StenosisOptions {
                     normal_offset: NASCET_OFFSET,
