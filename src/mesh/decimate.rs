@@ -6,8 +6,8 @@
 //! subset of the input's, in f64). The simplifier's own error is an estimate, so the result is
 //! checked: its symmetric Hausdorff distance to the mesh it came from (area samples plus every
 //! vertex, [`surface_distance`]) must be within the bound, and a closed manifold input must stay
-//! closed and manifold. When a check fails the simplifier's limit is halved and it tries again;
-//! after a few tries the mesh is given back unchanged.
+//! closed and manifold. When a check fails the simplifier's limit is lowered by a quarter and it
+//! tries again; after a few tries the mesh is given back unchanged.
 
 use super::distance::{surface_distance, SurfaceDistanceOptions};
 use super::info::mesh_info;
@@ -24,8 +24,10 @@ pub struct DecimateOptions {
     /// runs well below the true distance: on the shared vessels limits of 0.1h to 0.2h give
     /// 0.3h to 0.45h, so it starts under the bound).
     pub first_limit_fraction: f64,
-    /// Tries, the limit halved after each failed check.
+    /// Tries, the limit multiplied by `shrink` after each failed check.
     pub tries: usize,
+    /// Factor of the limit after a failed check (dimensionless, in (0, 1)).
+    pub shrink: f64,
     /// Area samples per surface of the Hausdorff check (every vertex is measured too).
     pub samples: usize,
 }
@@ -35,7 +37,8 @@ impl Default for DecimateOptions {
         DecimateOptions {
             max_distance: 0.0,
             first_limit_fraction: 0.4,
-            tries: 4,
+            tries: 8,
+            shrink: 0.75,
             samples: 200_000,
         }
     }
@@ -116,7 +119,7 @@ pub fn decimate_mesh(mesh: &TriMesh, opts: &DecimateOptions) -> (TriMesh, Decima
                 return (candidate, report);
             }
         }
-        limit *= 0.5;
+        limit *= opts.shrink.clamp(0.01, 0.99);
     }
     (mesh.clone(), report)
 }

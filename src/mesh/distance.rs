@@ -6,8 +6,15 @@
 //! area at (k + ½)/n (stratified in area) and its position in the triangle from the additive
 //! recurrence of the plastic number (the R2 low-discrepancy sequence), folded into the triangle.
 //! The Hausdorff distance also takes every vertex of both meshes into account, where maxima of
-//! piecewise-linear surfaces usually sit.
+//! piecewise-linear surfaces usually sit, and is then refined to within [`HAUSDORFF_TOLERANCE`]
+//! of the finer mesh's mean edge: the distance to a surface is 1-Lipschitz, so on a triangle with
+//! centroid g and corners within r of it no point is farther than d(g) + r; every triangle whose
+//! bound passes the largest distance found is split in four, its parts' centroids measured, and
+//! so on (branch and bound, at most [`HAUSDORFF_FACE_BUDGET`] centroids per face). Without it the
+//! figure is the largest of the samples taken, which moved by 0.15h on a real vessel's
+//! reconstruction when the sample count changed by 0.5%.
 
+use super::measures::mean_edge_length;
 use super::TriMesh;
 use crate::bvh::MeshBvh;
 use nalgebra::Point3;
@@ -26,14 +33,21 @@ impl Default for SurfaceDistanceOptions {
     }
 }
 
+/// The Hausdorff distances are refined to within this fraction of the finer mesh's mean edge.
+pub const HAUSDORFF_TOLERANCE: f64 = 0.01;
+
+/// At most this many centroids are measured per triangle while refining (a guard: the bound
+/// usually closes after a few splits, on the few triangles near the largest distance).
+pub const HAUSDORFF_FACE_BUDGET: usize = 1024;
+
 /// Distances between surfaces A and B, in the meshes' own units.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct SurfaceDistance {
     /// Symmetric Hausdorff distance: max(max_A d(·, B), max_B d(·, A)).
     pub hausdorff: f64,
-    /// Largest distance from A (samples and vertices) to B.
+    /// Largest distance from A to B (samples and vertices, refined; see the module doc).
     pub max_a_to_b: f64,
-    /// Largest distance from B (samples and vertices) to A.
+    /// Largest distance from B to A (likewise).
     pub max_b_to_a: f64,
     /// Mean distance over the area-weighted samples of both surfaces.
     pub mean_distance: f64,
@@ -75,6 +89,39 @@ pub fn sample_surface(mesh: &TriMesh, n: usize) -> Vec<Point3<f64>> {
         .collect()
 }
 
+/// The largest distance from the surface `from` to `to`, at least `lower` (a distance already
+/// found), to within `tol` (world units) unless a triangle's budget runs out: branch and bound on
+/// the triangles of `from` (see the module doc).
+fn refine_directed_max(from: &TriMesh, to: &MeshBvh, lower: f64, tol: f64) -> f64 {
+    if !lower.is_finite() || tol <= 0.0 {
+        return lower;
+    }
+    (0..from.num_faces())
+        .into_par_iter()
+        .map(|f| {
+            let mut best = lower;
+            let mut stack = vec![from.triangle(f)];
+            let mut measured = 0;
+            while let Some([a, b, c]) = stack.pop() {
+                let g = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+                let d = to.closest_point(&g).distance;
+                measured += 1;
+                best = best.max(d);
+                let r = [a, b, c].iter().map(|p| (p - g).norm()).fold(0.0, f64::max);
+                if d + r > best + tol && measured < HAUSDORFF_FACE_BUDGET {
+                    let (ab, bc, ca) = (
+                        Point3::from((a.coords + b.coords) / 2.0),
+                        Point3::from((b.coords + c.coords) / 2.0),
+                        Point3::from((c.coords + a.coords) / 2.0),
+                    );
+                    stack.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+                }
+            }
+            best
+        })
+        .reduce(|| lower, f64::max)
+}
+
 /// Symmetric surface distances between `a` and `b` (see [`SurfaceDistance`]).
 pub fn surface_distance(
     a: &TriMesh,
@@ -82,6 +129,16 @@ pub fn surface_distance(
     opts: &SurfaceDistanceOptions,
 ) -> SurfaceDistance {
     let (bvh_a, bvh_b) = rayon::join(|| MeshBvh::new(a), || MeshBvh::new(b));
+    let edge = [a, b]
+        .map(mean_edge_length)
+        .into_iter()
+        .filter(|e| *e > 0.0 && e.is_finite())
+        .fold(f64::INFINITY, f64::min);
+    let tol = if edge.is_finite() {
+        HAUSDORFF_TOLERANCE * edge
+    } else {
+        0.0
+    };
     let directed = |from: &TriMesh, to: &MeshBvh| -> (f64, f64, f64) {
         let samples = sample_surface(from, opts.samples);
         let dists: Vec<f64> = samples
@@ -94,6 +151,7 @@ pub fn surface_distance(
             .map(|p| to.closest_point(p).distance)
             .reduce(|| 0.0, f64::max);
         let max = dists.iter().copied().fold(vertex_max, f64::max);
+        let max = refine_directed_max(from, to, max, tol);
         (
             max,
             dists.iter().sum::<f64>(),
@@ -109,5 +167,78 @@ pub fn surface_distance(
         mean_distance: (ab.1 + ba.1) / n,
         rms_distance: ((ab.2 + ba.2) / n).sqrt(),
         samples_per_surface: opts.samples,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A triangle of about 10 across and, as the other surface, three small triangles at its
+    /// corners: the farthest point of the large one lies inside it, far from every vertex.
+    fn corners() -> (TriMesh, TriMesh) {
+        let big = TriMesh::new(
+            vec![
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(10.0, 0.0, 0.0),
+                Point3::new(3.0, 8.0, 0.0),
+            ],
+            vec![[0, 1, 2]],
+        );
+        let mut vertices = Vec::new();
+        let mut faces = Vec::new();
+        for (c, a, b) in [
+            ([0.0, 0.0], [0.5, 0.0], [0.0, 0.5]),
+            ([10.0, 0.0], [-0.5, 0.0], [0.0, 0.5]),
+            ([3.0, 8.0], [0.5, -0.5], [-0.2, -0.5]),
+        ] {
+            let k = vertices.len() as u32;
+            let p = Point3::new(c[0], c[1], 0.0);
+            vertices.extend([
+                p,
+                p + Vector3::new(a[0], a[1], 0.0),
+                p + Vector3::new(b[0], b[1], 0.0),
+            ]);
+            faces.push([k, k + 1, k + 2]);
+        }
+        (big, TriMesh::new(vertices, faces))
+    }
+
+    use nalgebra::Vector3;
+
+    #[test]
+    fn the_hausdorff_distance_is_refined_to_the_true_maximum() {
+        let (big, small) = corners();
+        // Brute force: the largest distance over a fine barycentric lattice of the big triangle.
+        let bvh = MeshBvh::new(&small);
+        let n = 1500;
+        let brute = (0..=n)
+            .into_par_iter()
+            .map(|i| {
+                (0..=n - i)
+                    .map(|j| {
+                        let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+                        let p = Point3::new(10.0 * u + 3.0 * v, 8.0 * v, 0.0);
+                        bvh.closest_point(&p).distance
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .reduce(|| 0.0, f64::max);
+        // The small triangles' mean edge is 0.57: the refinement closes to 0.006.
+        let tol = HAUSDORFF_TOLERANCE * mean_edge_length(&small);
+        for samples in [3, 20, 10_000] {
+            let d = surface_distance(&big, &small, &SurfaceDistanceOptions { samples });
+            assert!(
+                (d.max_a_to_b - brute).abs() <= tol + 20.0 / n as f64,
+                "{samples} samples: {} against {brute}",
+                d.max_a_to_b
+            );
+        }
+        // What the samples and the vertices alone reach with few samples: well short of it.
+        let sampled = sample_surface(&big, 3)
+            .iter()
+            .map(|p| bvh.closest_point(p).distance)
+            .fold(0.0, f64::max);
+        assert!(sampled < brute - 0.5, "{sampled} against {brute}");
     }
 }
