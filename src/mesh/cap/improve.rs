@@ -28,6 +28,9 @@ pub(super) struct Improver<'a> {
     inc: Vec<Vec<usize>>,
     n_rim: usize,
     chord_taken: &'a dyn Fn(usize, usize) -> bool,
+    /// The vertices the sweeps work on (`None`: all): after a round of bisections, the new
+    /// vertices and two rings around them (the rest is already optimised).
+    active: Option<Vec<bool>>,
 }
 
 impl<'a> Improver<'a> {
@@ -51,7 +54,42 @@ impl<'a> Improver<'a> {
             inc,
             n_rim,
             chord_taken,
+            active: None,
         }
+    }
+
+    /// Whether the sweeps work on vertex `v`.
+    fn is_active(&self, v: usize) -> bool {
+        self.active
+            .as_ref()
+            .is_none_or(|a| a.get(v).copied().unwrap_or(true))
+    }
+
+    /// The vertices from `first` on, those of the triangles worse than `below`, and the two
+    /// rings of triangles around them.
+    fn near_new(&self, first: usize, below: f64) -> Vec<bool> {
+        let mut mark = vec![false; self.pts.len()];
+        for m in mark.iter_mut().skip(first) {
+            *m = true;
+        }
+        for t in (0..self.tris.len()).filter(|&t| self.alive[t]) {
+            if self.q(&self.tris[t]) < below {
+                for &v in &self.tris[t] {
+                    mark[v] = true;
+                }
+            }
+        }
+        for _ring in 0..2 {
+            let seeds: Vec<usize> = (0..mark.len()).filter(|&v| mark[v]).collect();
+            for v in seeds {
+                for t in self.star(v) {
+                    for &u in &self.tris[t] {
+                        mark[u] = true;
+                    }
+                }
+            }
+        }
+        mark
     }
 
     fn q(&self, t: &[usize; 3]) -> f64 {
@@ -100,8 +138,12 @@ impl<'a> Improver<'a> {
 
     /// Improves the triangulation: local optimisation (flips, vertex removal, smoothing) until
     /// nothing changes, then rounds of longest-edge bisection of the worst triangles followed by
-    /// optimisation, each kept only if it raises the worst quality, until the worst aspect ratio
-    /// is at most `good_aspect` (at most `max_new` new vertices in all).
+    /// optimisation around the new vertices and the triangles the round set out to mend (two
+    /// rings of triangles; the rest was optimised already), each kept only if it raises the
+    /// worst quality, until the worst aspect ratio is at most `good_aspect` (at most `max_new`
+    /// new vertices in all). On the open aorta's widest end, a cap of 3,000 triangles, the rounds
+    /// take 0.04 s where optimising the whole cap each round took 0.21 s; its worst aspect ratio
+    /// is 5.20 (4.36 then), the aneurysm's 7.00 (6.99), the other shared vessels' unchanged.
     pub fn run(&mut self, good_aspect: f64, max_new: usize) {
         let limit = self.pts.len() + max_new;
         self.optimize(40);
@@ -116,11 +158,15 @@ impl<'a> Improver<'a> {
                 self.alive.clone(),
                 self.inc.clone(),
             );
-            // Bisect the triangles near the worst one in quality.
-            if !self.split_sweep((2.0 * worst).min(1.0 / good_aspect), limit) {
+            // Bisect the triangles near the worst one in quality, and optimise around them.
+            let first_new = self.pts.len();
+            let below = (2.0 * worst).min(1.0 / good_aspect);
+            if !self.split_sweep(below, limit) {
                 break;
             }
+            self.active = Some(self.near_new(first_new, below));
             self.optimize(40);
+            self.active = None;
             if self.min_quality() <= worst + 1e-9 {
                 (self.pts, self.tris, self.alive, self.inc) = saved;
                 break;
@@ -260,6 +306,9 @@ impl<'a> Improver<'a> {
     fn flip_sweep(&mut self) -> bool {
         let mut changed = false;
         for t1 in 0..self.tris.len() {
+            if !self.tris[t1].iter().any(|&v| self.is_active(v)) {
+                continue;
+            }
             for k in 0..3 {
                 if !self.alive[t1] {
                     break;
@@ -318,6 +367,9 @@ impl<'a> Improver<'a> {
     fn smooth_sweep(&mut self) -> bool {
         let mut changed = false;
         for v in self.n_rim..self.pts.len() {
+            if !self.is_active(v) {
+                continue;
+            }
             let star: Vec<usize> = self.star(v).collect();
             if star.is_empty() {
                 continue;
@@ -380,6 +432,9 @@ impl<'a> Improver<'a> {
     fn remove_sweep(&mut self, below: f64) -> bool {
         let mut changed = false;
         for v in self.n_rim..self.pts.len() {
+            if !self.is_active(v) {
+                continue;
+            }
             let star: Vec<usize> = self.star(v).collect();
             if star.is_empty() {
                 continue;
