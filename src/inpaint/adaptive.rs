@@ -112,8 +112,8 @@ where
         .sum()
 }
 
-/// The smallest node box `[lo, hi)` holding every ball's nodes, or `None` when no ball reaches
-/// the grid.
+/// A node box `[lo, hi)` holding every ball's nodes (a node to spare on each side), or `None`
+/// when no ball reaches the grid.
 fn node_box(grid: &Grid3, balls: &[Ball]) -> Option<([usize; 3], [usize; 3])> {
     let dims = grid.dims();
     let t = grid.transform();

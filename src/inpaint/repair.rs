@@ -374,13 +374,15 @@ pub fn repair_with_centerline(
     lap("voxelize", &mut timings);
     let depth = region_depth(&phi0, balls);
     let unknown = region_mask(&depth);
-    // R: the largest inside distance in a shell just outside D: as deep as the largest ball
-    // where the core was redistanced (its box reaches past the balls' shell), else the core's
-    // margin, measured to the input at the nodes where the voxelizer's band left a placeholder.
-    let bvh = MeshBvh::new(&closed_input);
-    let radius_estimate = match opts.method {
-        InpaintMethod::Centerline => shell_radius(&phi0, &depth, AXIAL_CORE_VOXELS * h, Some(&bvh)),
-        _ => shell_radius(&phi0, &depth, rmax.max(3.0 * h), None),
+    // R: the largest inside distance in a shell just outside D. Where the core was redistanced,
+    // over the nodes up to the largest ball's radius outside D (those of the core's box); for
+    // the centreline fill, over the core's 3-voxel shell, measured to the input where the
+    // voxelizer's band left a placeholder.
+    let centreline_bvh =
+        matches!(opts.method, InpaintMethod::Centerline).then(|| MeshBvh::new(&closed_input));
+    let radius_estimate = match &centreline_bvh {
+        Some(bvh) => shell_radius(&phi0, &depth, AXIAL_CORE_VOXELS * h, Some(bvh)),
+        None => shell_radius(&phi0, &depth, rmax.max(3.0 * h), None),
     }
     .max(h);
     let speed = opts.speed.unwrap_or(1.0 / radius_estimate);
@@ -427,6 +429,7 @@ pub fn repair_with_centerline(
                     }
                 },
             };
+            let bvh = centreline_bvh.unwrap_or_else(|| MeshBvh::new(&closed_input));
             let rim = hole_rims(&closed_input, cap_faces.clone(), balls);
             let holes = HoleCaps {
                 faces: cap_faces.clone(),
