@@ -100,6 +100,7 @@ pub fn decimate_mesh(mesh: &TriMesh, opts: &DecimateOptions) -> (TriMesh, Decima
     let mut limit = opts.first_limit_fraction * opts.max_distance;
     let mut locks = vec![false; mesh.num_vertices()];
     let rings = vertex_rings(mesh);
+    let input_bvh = MeshBvh::new(mesh);
     for _ in 0..opts.tries.max(1) {
         let kept = simplify_with_locks_decoder(
             &indices,
@@ -135,6 +136,7 @@ pub fn decimate_mesh(mesh: &TriMesh, opts: &DecimateOptions) -> (TriMesh, Decima
             if lock_where_far(
                 mesh,
                 &kept,
+                &input_bvh,
                 &candidate,
                 opts.max_distance,
                 &rings,
@@ -149,21 +151,22 @@ pub fn decimate_mesh(mesh: &TriMesh, opts: &DecimateOptions) -> (TriMesh, Decima
     (mesh.clone(), report)
 }
 
-/// Locks the vertices of `mesh` where `candidate` (its triangles `kept`, an index list over
-/// `mesh`'s vertices) strays more than three quarters of `max_distance` from it — the input's
+/// Locks the vertices of `mesh` (`to_mesh` its hierarchy) where `candidate` (its triangles
+/// `kept`, an index list over `mesh`'s vertices) strays more than three quarters of `max_distance` from it — the input's
 /// vertices far from the candidate, the corners of candidate triangles whose centroid or edge
 /// midpoints lie far from the input — and one ring around them. Returns how many were newly
 /// locked.
 fn lock_where_far(
     mesh: &TriMesh,
     kept: &[u32],
+    to_mesh: &MeshBvh,
     candidate: &TriMesh,
     max_distance: f64,
     rings: &[Vec<u32>],
     locks: &mut [bool],
 ) -> usize {
     let far = 0.75 * max_distance;
-    let (to_candidate, to_mesh) = rayon::join(|| MeshBvh::new(candidate), || MeshBvh::new(mesh));
+    let to_candidate = MeshBvh::new(candidate);
     let mut mark: Vec<bool> = mesh
         .vertices
         .par_iter()
