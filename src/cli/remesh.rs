@@ -1,7 +1,7 @@
 //! `vesselmsr remesh MESH -o OUT`: mesh → signed distance grid φ → zero level set by marching
 //! cubes (enclosed cavities the input does not have reopened), vertices then projected onto the
 //! input and edges split where the surface is still off it: a closed, manifold, outward mesh at
-//! the grid's resolution (open ends come out closed); `--decimate` then simplifies it within half
+//! the grid's resolution (open ends come out closed, flat, as `cap` closes them); `--decimate` then simplifies it within half
 //! a voxel (`mesh::decimate`). The work after voxelization is the library's
 //! `levelset::remesh::remesh_levelset`, which the Python package's `remesh` calls too.
 
@@ -25,7 +25,7 @@ pub struct RemeshArgs {
     #[command(flatten)]
     pub grid: GridArgs,
     /// Keep the marching-cubes surface as it is, instead of moving its vertices onto the input
-    /// surface (within one voxel, away from open ends) and splitting the edges whose midpoints
+    /// surface (its open ends capped; within one voxel) and splitting the edges whose midpoints
     /// stay farther than 0.05 voxel from it.
     #[arg(long)]
     pub no_project: bool,
