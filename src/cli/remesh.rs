@@ -1,9 +1,9 @@
 //! `vesselmsr remesh MESH -o OUT`: mesh → signed distance grid φ → zero level set by marching
 //! cubes (enclosed cavities the input does not have reopened), vertices then projected onto the
 //! input and edges split where the surface is still off it: a closed, manifold, outward mesh at
-//! the grid's resolution (open ends come out closed, flat, as `cap` closes them); `--decimate` then simplifies it within half
-//! a voxel (`mesh::decimate`). The work after voxelization is the library's
-//! `levelset::remesh::remesh_levelset`, which the Python package's `remesh` calls too.
+//! the grid's resolution (open ends come out closed, flat, as `cap` closes them); `--decimate`
+//! then simplifies it within half a voxel (`mesh::decimate`). The work after voxelization is the
+//! library's `levelset::remesh::remesh_levelset`, which the Python package's `remesh` calls too.
 
 use super::grid_args::{load_and_voxelize, GridArgs, Voxelized};
 use super::outputs::Outputs;

@@ -15,8 +15,8 @@
 //! A failed topology check also locks the vertices of the edges the result tore (edges of more
 //! than two triangles, where collapses brought two sheets together) and a ring around them: the
 //! aneurysm's remesh, whose open ends come out with sharp rims, tore at every limit above the
-//! one that kept 34,104 faces without these locks, and keeps 6,506 with them. After a few tries the mesh is given back
-//! unchanged.
+//! one that kept 34,104 faces without these locks, and keeps 6,506 with them. After a few tries
+//! the mesh is given back unchanged.
 
 use super::distance::{surface_distance, SurfaceDistanceOptions};
 use super::info::mesh_info;
@@ -161,9 +161,10 @@ pub fn decimate_mesh(mesh: &TriMesh, opts: &DecimateOptions) -> (TriMesh, Decima
 }
 
 /// Locks the vertices of `mesh` (`to_mesh` its hierarchy) where `candidate` (its triangles
-/// `kept`, an index list over `mesh`'s vertices) strays more than three quarters of `max_distance` from it — the input's
-/// vertices far from the candidate, the corners of candidate triangles whose centroid or edge
-/// midpoints lie far from the input — and one ring around them. Returns how many were newly
+/// `kept`, an index list over `mesh`'s vertices) strays more than three quarters of
+/// `max_distance` from it — the input's vertices far from the candidate, the corners of
+/// candidate triangles whose centroid or edge midpoints lie far from the input — and one ring
+/// around them. Returns how many were newly
 /// locked.
 fn lock_where_far(
     mesh: &TriMesh,
