@@ -164,8 +164,7 @@ pub fn decimate_mesh(mesh: &TriMesh, opts: &DecimateOptions) -> (TriMesh, Decima
 /// `kept`, an index list over `mesh`'s vertices) strays more than three quarters of
 /// `max_distance` from it — the input's vertices far from the candidate, the corners of
 /// candidate triangles whose centroid or edge midpoints lie far from the input — and one ring
-/// around them. Returns how many were newly
-/// locked.
+/// around them. Returns how many were newly locked.
 fn lock_where_far(
     mesh: &TriMesh,
     kept: &[u32],
