@@ -1,52 +1,147 @@
 //! Topology clean-up of a fill: pieces the fill created inside D that do not belong to the
 //! vessel. A connected part of the inside {φ < 0} (or of the outside {φ ≥ 0}) that lies wholly
 //! within D touches none of the known data: debris floating in D, or a void sealed in the lumen.
-//! Both are removed by flipping their nodes to the other side (6-connected flood fill).
+//! Both are removed by flipping their nodes to the other side (6-connected components).
+//!
+//! The components are labelled by runs: each grid row's maximal runs of nodes of one side in D
+//! (found row by row in parallel, with whether a node of the run has a face neighbour of the same
+//! side outside D: the component is then anchored to the known data), joined by union–find
+//! wherever two runs of neighbouring rows overlap. The nodes are read once, with no division per
+//! node: on the aneurysm's narrowing (a ball of 98 voxels' radius) 0.19 s by a node-by-node
+//! flood, 0.012 s by runs.
 
-use crate::grid::{face_neighbours, Grid3};
+use crate::grid::Grid3;
+use rayon::prelude::*;
+
+/// A run of nodes `first..=last` along x in one grid row; `anchored` when one of its nodes has a
+/// face neighbour of the same side outside D.
+#[derive(Debug, Clone, Copy)]
+struct Run {
+    first: u32,
+    last: u32,
+    anchored: bool,
+}
+
+/// Union–find root of `x`, halving the path on the way.
+fn root(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        let up = parent[parent[x as usize] as usize];
+        parent[x as usize] = up;
+        x = up;
+    }
+    x
+}
+
+/// Joins every run of `row` (ids from `first`) with the overlapping runs of `other` (ids from
+/// `other_first`); both sorted along x.
+fn join_rows(parent: &mut [u32], row: &[Run], first: u32, other: &[Run], other_first: u32) {
+    let (mut a, mut b) = (0, 0);
+    while a < row.len() && b < other.len() {
+        let (r, o) = (row[a], other[b]);
+        if r.first <= o.last && o.first <= r.last {
+            let (x, y) = (
+                root(parent, first + a as u32),
+                root(parent, other_first + b as u32),
+            );
+            if x != y {
+                parent[x.max(y) as usize] = x.min(y);
+            }
+        }
+        if r.last < o.last {
+            a += 1;
+        } else {
+            b += 1;
+        }
+    }
+}
 
 /// Flips the components of the inside and of the outside of `phi` that contain no node outside D
 /// (`unknown` marks D). Returns how many nodes were flipped.
 pub fn remove_islands(phi: &mut Grid3, unknown: &[bool]) -> usize {
-    let dims = phi.dims();
+    let [nx, ny, nz] = phi.dims();
     let h = phi.voxel() as f32;
-    let n = phi.data().len();
+    let layer = nx * ny;
     let mut flipped = 0;
-    // A component of one side with no node outside D is a component of that side's nodes in D
-    // with no face neighbour of the same side outside D: only D is walked.
-    let mut stack = Vec::new();
-    let mut members = Vec::new();
     for inside in [true, false] {
-        let side = |v: f32| (v < 0.0) == inside;
-        let mut seen = vec![false; n];
-        for start in 0..n {
-            if seen[start] || !unknown[start] || !side(phi.data()[start]) {
-                continue;
-            }
-            members.clear();
-            let mut anchored = false;
-            seen[start] = true;
-            stack.push(start);
-            while let Some(v) = stack.pop() {
-                members.push(v);
-                for w in face_neighbours(dims, v) {
-                    if !side(phi.data()[w]) {
+        let data = phi.data();
+        let same = |n: usize| (data[n] < 0.0) == inside;
+        let member = |n: usize| unknown[n] && same(n);
+        let anchor = |n: usize| !unknown[n] && same(n);
+        let rows: Vec<Vec<Run>> = (0..ny * nz)
+            .into_par_iter()
+            .map(|row| {
+                let (j, k) = (row % ny, row / ny);
+                let base = row * nx;
+                let across = |n: usize| {
+                    (j > 0 && anchor(n - nx))
+                        || (j + 1 < ny && anchor(n + nx))
+                        || (k > 0 && anchor(n - layer))
+                        || (k + 1 < nz && anchor(n + layer))
+                };
+                let mut runs = Vec::new();
+                let mut i = 0;
+                while i < nx {
+                    if !member(base + i) {
+                        i += 1;
                         continue;
                     }
-                    if !unknown[w] {
-                        anchored = true;
-                    } else if !seen[w] {
-                        seen[w] = true;
-                        stack.push(w);
+                    let first = i;
+                    let mut anchored = first > 0 && anchor(base + first - 1);
+                    while i < nx && member(base + i) {
+                        anchored = anchored || across(base + i);
+                        i += 1;
                     }
+                    // The node after the run is not a member: of the same side, it is outside D.
+                    anchored = anchored || (i < nx && anchor(base + i));
+                    runs.push(Run {
+                        first: first as u32,
+                        last: (i - 1) as u32,
+                        anchored,
+                    });
+                }
+                runs
+            })
+            .collect();
+        let mut offset = Vec::with_capacity(rows.len() + 1);
+        offset.push(0u32);
+        for r in &rows {
+            offset.push(offset.last().copied().unwrap_or(0) + r.len() as u32);
+        }
+        let total = *offset.last().unwrap_or(&0) as usize;
+        if total == 0 {
+            continue;
+        }
+        let mut parent: Vec<u32> = (0..total as u32).collect();
+        for row in 0..rows.len() {
+            let (j, k) = (row % ny, row / ny);
+            if j > 0 {
+                let o = row - 1;
+                join_rows(&mut parent, &rows[row], offset[row], &rows[o], offset[o]);
+            }
+            if k > 0 {
+                let o = row - ny;
+                join_rows(&mut parent, &rows[row], offset[row], &rows[o], offset[o]);
+            }
+        }
+        let mut anchored = vec![false; total];
+        for (row, runs) in rows.iter().enumerate() {
+            for (a, run) in runs.iter().enumerate() {
+                if run.anchored {
+                    let r = root(&mut parent, offset[row] + a as u32);
+                    anchored[r as usize] = true;
                 }
             }
-            if !anchored {
-                let data = phi.data_mut();
-                for &v in &members {
-                    data[v] = if inside { 0.5 * h } else { -0.5 * h };
+        }
+        let value = if inside { 0.5 * h } else { -0.5 * h };
+        let out = phi.data_mut();
+        for (row, runs) in rows.iter().enumerate() {
+            for (a, run) in runs.iter().enumerate() {
+                let r = root(&mut parent, offset[row] + a as u32);
+                if !anchored[r as usize] {
+                    let base = row * nx;
+                    out[base + run.first as usize..=base + run.last as usize].fill(value);
+                    flipped += (run.last - run.first + 1) as usize;
                 }
-                flipped += members.len();
             }
         }
     }
@@ -56,8 +151,84 @@ pub fn remove_islands(phi: &mut Grid3, unknown: &[bool]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::GridTransform;
+    use crate::grid::{face_neighbours, GridTransform};
     use nalgebra::{Point3, Vector3};
+
+    /// The components node by node (a depth-first flood over D's nodes of each side), as the
+    /// reference for the runs.
+    fn remove_islands_by_flood(phi: &mut Grid3, unknown: &[bool]) -> usize {
+        let dims = phi.dims();
+        let h = phi.voxel() as f32;
+        let n = phi.data().len();
+        let mut flipped = 0;
+        for inside in [true, false] {
+            let side = |v: f32| (v < 0.0) == inside;
+            let mut seen = vec![false; n];
+            for start in 0..n {
+                if seen[start] || !unknown[start] || !side(phi.data()[start]) {
+                    continue;
+                }
+                let (mut stack, mut members, mut anchored) = (vec![start], Vec::new(), false);
+                seen[start] = true;
+                while let Some(v) = stack.pop() {
+                    members.push(v);
+                    for w in face_neighbours(dims, v) {
+                        if !side(phi.data()[w]) {
+                            continue;
+                        }
+                        if !unknown[w] {
+                            anchored = true;
+                        } else if !seen[w] {
+                            seen[w] = true;
+                            stack.push(w);
+                        }
+                    }
+                }
+                if !anchored {
+                    for &v in &members {
+                        phi.data_mut()[v] = if inside { 0.5 * h } else { -0.5 * h };
+                    }
+                    flipped += members.len();
+                }
+            }
+        }
+        flipped
+    }
+
+    /// Random speckle (a quarter to three quarters inside) in a ball D of a box: many small
+    /// components of both sides, some touching the box's faces, some D's boundary.
+    #[test]
+    fn runs_flip_what_the_flood_flips() {
+        let dims = [23, 17, 19];
+        let t = GridTransform::new(Point3::origin(), 1.0);
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as f64 / (1u64 << 31) as f64
+        };
+        for trial in 0..12 {
+            let fill = 0.25 + 0.5 * next();
+            let mut a = Grid3::new(dims, t, 1.0).unwrap();
+            let mut unknown = vec![false; a.data().len()];
+            let centre = Point3::new(11.0, 8.0, 9.0 + trial as f64 * 0.3);
+            for n in 0..a.data().len() {
+                let [i, j, k] = a.coords(n);
+                let p = Point3::new(i as f64, j as f64, k as f64);
+                unknown[n] = (p - centre).norm() < 7.5;
+                a.data_mut()[n] = if next() < fill { -1.0 } else { 1.0 };
+            }
+            let mut b = a.clone();
+            let (fa, fb) = (
+                remove_islands(&mut a, &unknown),
+                remove_islands_by_flood(&mut b, &unknown),
+            );
+            assert!(fb > 0, "trial {trial}: nothing to flip");
+            assert_eq!(fa, fb, "trial {trial}");
+            assert_eq!(a.data(), b.data(), "trial {trial}");
+        }
+    }
 
     /// A slab (anchored: it leaves D), a blob floating in D and a void sealed in the slab inside
     /// D: the blob and the void are flipped, the slab is kept.
