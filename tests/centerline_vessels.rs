@@ -2,16 +2,19 @@
 //! narrowing found at 50 ± 3% with no other lesion, no narrowing above 5% on the intact
 //! phantoms; on every real vessel of ../shared/data/real one connected graph per component, no
 //! terminal branch shorter than its radius, every open end an endpoint; the coronary's known
-//! lesion found first.
+//! lesion found first; a region of `--stenoses` reported at its own throat, not a neighbour's.
 
 mod common;
 
 use nalgebra::Point3;
+use vesselmsr::centerline::healthy::HealthyVessel;
 use vesselmsr::centerline::profile::measure_profiles;
 use vesselmsr::centerline::stenosis::{find_stenoses, Lesion, StenosisFindOptions};
 use vesselmsr::centerline::{compute_centerline, Centerline, CenterlineOptions, EndKind};
 use vesselmsr::inpaint::holes::{classify_loops, LoopKind, LoopOptions};
 use vesselmsr::inpaint::phantom::{make_phantom, PhantomKind, PhantomOptions};
+use vesselmsr::inpaint::region::Ball;
+use vesselmsr::report::repair_report::{region_reports, DETECTED_STENOSIS};
 use vesselmsr::TriMesh;
 
 fn centerline(mesh: &TriMesh) -> Centerline {
@@ -193,4 +196,75 @@ fn coronary_lesion_found() {
     );
     assert!((at - known).norm() <= 1.5);
     assert!((30.0..=60.0).contains(&l.diameter_stenosis_pct));
+}
+
+/// `repair --stenoses` reports each narrowing it found at its own throat: on a tube with two
+/// narrowings 8 radii apart (50% and 35% of the radius), a ball on the shallower one large
+/// enough to hold the deeper one's throat reports the shallower one's degree (as the centreline
+/// finds it) when it is a detected narrowing's region, and the deepest narrowing in it when it
+/// is a plain region.
+#[test]
+fn a_detected_narrowing_is_reported_at_its_own_throat() {
+    let mut tube = vesselmsr::mesh::primitives::open_tube(3.0, 40.0, 96, 321);
+    let dent = |z: f64, z0: f64, sigma: f64, depth: f64| {
+        1.0 - depth * (-(z - z0).powi(2) / (2.0 * sigma * sigma)).exp()
+    };
+    for v in &mut tube.vertices {
+        let f = dent(v.z, 16.0, 1.5, 0.5) * dent(v.z, 24.0, 2.5, 0.35);
+        v.x *= f;
+        v.y *= f;
+    }
+    let healthy = HealthyVessel::new(&tube, centerline(&tube), &StenosisFindOptions::default());
+    let deep = healthy
+        .lesions
+        .iter()
+        .max_by(|a, b| a.diameter_stenosis_pct.total_cmp(&b.diameter_stenosis_pct))
+        .unwrap()
+        .clone();
+    let shallow = healthy
+        .lesions
+        .iter()
+        .max_by(|a, b| a.position[2].total_cmp(&b.position[2]))
+        .unwrap()
+        .clone();
+    let (pd, ps) = (Point3::from(deep.position), Point3::from(shallow.position));
+    println!(
+        "deep {:.1}% at z = {:.2}, shallow {:.1}% at z = {:.2}",
+        deep.diameter_stenosis_pct, pd.z, shallow.diameter_stenosis_pct, ps.z
+    );
+    assert!(deep.diameter_stenosis_pct > shallow.diameter_stenosis_pct + 8.0);
+    let ball = Ball {
+        center: ps,
+        radius: 1.1 * (pd - ps).norm(),
+    };
+    let reports = region_reports(
+        &tube,
+        &tube,
+        &[ball, ball],
+        &[DETECTED_STENOSIS.into(), "region".into()],
+        Some(&healthy),
+        None,
+    );
+    // Each throat's own figure: the region report's measure within half a radius of it.
+    let own = |p: Point3<f64>| {
+        let small = Ball {
+            center: p,
+            radius: 1.5,
+        };
+        healthy
+            .measure_in(&tube, &small)
+            .unwrap()
+            .diameter_stenosis_pct
+    };
+    let pct = |k: usize| reports[k].diameter_stenosis_pct.unwrap();
+    println!(
+        "detected region {:.1}% (its throat {:.1}%), plain region {:.1}% (the deeper throat {:.1}%)",
+        pct(0),
+        own(ps),
+        pct(1),
+        own(pd)
+    );
+    assert!(own(pd) > own(ps) + 8.0);
+    assert!((pct(0) - own(ps)).abs() < 1.0);
+    assert!((pct(1) - own(pd)).abs() < 1.0);
 }

@@ -31,13 +31,11 @@ use crate::mesh::topology::EdgeMap;
 use crate::mesh::units::{check_vessel_scale, VesselScaleOptions};
 use crate::report::repair_report::{
     region_reports, surface_measures, LoopReport, MeshPart, RepairParameters, RepairReport,
+    DETECTED_STENOSIS,
 };
 use crate::{Error, Result, TriMesh};
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// The source of a region from `--stenoses` (the report's `source`).
-const DETECTED_STENOSIS: &str = "detected stenosis";
 
 /// What to repair and how: the regions' sources and the options of `vesselmsr repair`.
 #[derive(Debug, Clone)]

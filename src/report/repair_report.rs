@@ -146,6 +146,9 @@ pub fn surface_measures(info: &MeshInfo) -> SurfaceMeasures {
     }
 }
 
+/// The source of a region that `repair --stenoses` placed on a narrowing the centreline found.
+pub const DETECTED_STENOSIS: &str = "detected stenosis";
+
 /// The per-region figures for `balls` (with their `sources`), `input` being the measured input
 /// (capped) and `output` the repaired mesh; the stenosis along `healthy` (the input's centreline)
 /// where it has measured points in the region, else across the region's sections. `windings`:
@@ -174,7 +177,20 @@ pub fn region_reports(
         .map(|(k, ball)| {
             let vin = volume_in_ball_with(input, win_in, ball);
             let vout = volume_in_ball_with(output, win_out, ball);
-            let along = healthy.and_then(|h| h.measure_in(output, ball));
+            // A narrowing found by `--stenoses` is measured at its own narrowest point, the
+            // ball's centre (within a third of the ball's radius, half a healthy radius at
+            // least), not at the deepest narrowing the ball reaches: its ball (a healthy radius
+            // beyond the lesion's width) can hold a neighbouring lesion's throat.
+            let detected = sources.get(k).is_some_and(|s| s == DETECTED_STENOSIS);
+            let probe = Ball {
+                radius: if detected {
+                    ball.radius / 3.0
+                } else {
+                    ball.radius
+                },
+                ..*ball
+            };
+            let along = healthy.and_then(|h| h.measure_in(output, &probe));
             let mut report = RegionReport {
                 center: [ball.center.x, ball.center.y, ball.center.z],
                 radius: ball.radius,
