@@ -28,7 +28,7 @@ pub fn region_depth(grid: &Grid3, balls: &[Ball]) -> Vec<f32> {
 
 /// The unknown nodes: those strictly inside D.
 pub fn region_mask(depth: &[f32]) -> Vec<bool> {
-    depth.iter().map(|&d| d > 0.0).collect()
+    depth.par_iter().map(|&d| d > 0.0).collect()
 }
 
 /// Blend weight of the inpainted field: 0 outside D and on ∂D, rising smoothly (a cubic
@@ -36,7 +36,7 @@ pub fn region_mask(depth: &[f32]) -> Vec<bool> {
 pub fn blend_weights(depth: &[f32], band: f64) -> Vec<f32> {
     let band = band.max(f64::MIN_POSITIVE) as f32;
     depth
-        .iter()
+        .par_iter()
         .map(|&d| {
             let s = (d / band).clamp(0.0, 1.0);
             s * s * (3.0 - 2.0 * s)
