@@ -56,8 +56,8 @@
 //! The figures are those of the night's earlier run but two (the aneurysm's neck −0.4% → −0.5%,
 //! the coronary's chop#2 0.08h → 0.09h). Re-measured 2026-12-05 after the fill's islands were
 //! labelled by runs (load 1.5, 25 cases in 54 s): the same figures (four outputs compared byte
-//! for byte); a chop median
-//! 0.60 s (0.38–0.95 s, 72×), every case 0.38–1.24 s (the aneurysm's narrowing 1.46 → 1.24 s). Our report's diameter stenosis for the 50% narrowings:
+//! for byte); a chop median 0.60 s (0.38–0.95 s, 72×), every case 0.38–1.24 s (the aneurysm's
+//! narrowing 1.46 → 1.24 s). Our report's diameter stenosis for the 50% narrowings:
 //! 48.9, 45.2, 44.8, 45.2, 56.5% (the narrowest input diameter is within 1.4% of half the truth's
 //! at each site; the local reference is 9% below the truth's diameter there on three vessels,
 //! whose truth bulges at the site or whose shoulder beside a junction has no measured section,
