@@ -201,13 +201,8 @@ mod tests {
     fn runs_flip_what_the_flood_flips() {
         let dims = [23, 17, 19];
         let t = GridTransform::new(Point3::origin(), 1.0);
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 33) as f64 / (1u64 << 31) as f64
-        };
+        let mut rng = crate::inpaint::phantom::SplitMix(12345);
+        let mut next = || rng.uniform();
         for trial in 0..12 {
             let fill = 0.25 + 0.5 * next();
             let mut a = Grid3::new(dims, t, 1.0).unwrap();
