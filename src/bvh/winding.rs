@@ -465,7 +465,9 @@ fn build_expansions(
             count[nd.first_index as usize] + count[nd.first_index as usize + 1]
         };
     }
-    let direct = |n: usize| count[n] <= direct_max;
+    // A leaf is always summed over its triangles (it has no children to translate from), whatever
+    // `direct_max` is.
+    let direct = |n: usize| nodes[n].is_leaf() || count[n] <= direct_max;
     let children = |n: usize| {
         let f = nodes[n].first_index as usize;
         [f, f + 1]
@@ -667,9 +669,10 @@ mod tests {
             *v += (v.coords - Vector3::new(150.0, -80.0, 40.0)) * bump;
         }
         let bvh = MeshBvh::new(&mesh);
-        for order in [2, 4, 5] {
+        // Down to 1: every node with children translated (leaves hold up to 4 triangles).
+        for (order, direct_max) in [(2, DIRECT_MAX_TRIANGLES), (4, DIRECT_MAX_TRIANGLES), (5, 1)] {
             let (far, coefs) = build_expansions(&bvh, 3.0, order, usize::MAX);
-            let (far_t, coefs_t) = build_expansions(&bvh, 3.0, order, DIRECT_MAX_TRIANGLES);
+            let (far_t, coefs_t) = build_expansions(&bvh, 3.0, order, direct_max);
             let len = coef_len(order);
             let mut translated = 0;
             for (n, (a, b)) in far.iter().zip(&far_t).enumerate() {
