@@ -11,6 +11,7 @@
 //! flood, 0.012 s by runs.
 
 use crate::grid::Grid3;
+use crate::mesh::topology::{find, union};
 use rayon::prelude::*;
 
 /// A run of nodes `first..=last` along x in one grid row; `anchored` when one of its nodes has a
@@ -22,16 +23,6 @@ struct Run {
     anchored: bool,
 }
 
-/// Union–find root of `x`, halving the path on the way.
-fn root(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        let up = parent[parent[x as usize] as usize];
-        parent[x as usize] = up;
-        x = up;
-    }
-    x
-}
-
 /// Joins every run of `row` (ids from `first`) with the overlapping runs of `other` (ids from
 /// `other_first`); both sorted along x.
 fn join_rows(parent: &mut [u32], row: &[Run], first: u32, other: &[Run], other_first: u32) {
@@ -39,13 +30,7 @@ fn join_rows(parent: &mut [u32], row: &[Run], first: u32, other: &[Run], other_f
     while a < row.len() && b < other.len() {
         let (r, o) = (row[a], other[b]);
         if r.first <= o.last && o.first <= r.last {
-            let (x, y) = (
-                root(parent, first + a as u32),
-                root(parent, other_first + b as u32),
-            );
-            if x != y {
-                parent[x.max(y) as usize] = x.min(y);
-            }
+            union(parent, first + a as u32, other_first + b as u32);
         }
         if r.last < o.last {
             a += 1;
@@ -127,7 +112,7 @@ pub fn remove_islands(phi: &mut Grid3, unknown: &[bool]) -> usize {
         for (row, runs) in rows.iter().enumerate() {
             for (a, run) in runs.iter().enumerate() {
                 if run.anchored {
-                    let r = root(&mut parent, offset[row] + a as u32);
+                    let r = find(&mut parent, offset[row] + a as u32);
                     anchored[r as usize] = true;
                 }
             }
@@ -136,7 +121,7 @@ pub fn remove_islands(phi: &mut Grid3, unknown: &[bool]) -> usize {
         let out = phi.data_mut();
         for (row, runs) in rows.iter().enumerate() {
             for (a, run) in runs.iter().enumerate() {
-                let r = root(&mut parent, offset[row] + a as u32);
+                let r = find(&mut parent, offset[row] + a as u32);
                 if !anchored[r as usize] {
                     let base = row * nx;
                     out[base + run.first as usize..=base + run.last as usize].fill(value);

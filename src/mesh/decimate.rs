@@ -21,12 +21,12 @@
 use super::distance::{surface_distance, SurfaceDistanceOptions};
 use super::info::mesh_info;
 use super::measures::bounding_box;
+use super::topology::EdgeMap;
 use crate::bvh::MeshBvh;
 use crate::TriMesh;
 use meshopt::{simplify_with_locks_decoder, SimplifyOptions};
 use nalgebra::Point3;
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// Options of [`decimate_mesh`].
 #[derive(Clone, Debug)]
@@ -153,7 +153,7 @@ pub fn decimate_mesh(mesh: &TriMesh, opts: &DecimateOptions) -> (TriMesh, Decima
         } else if !ok_topology {
             // A few collapses tore the surface (edges of more than two triangles, where two
             // sheets met): keep the vertices there too (and lower the limit, as below).
-            lock_where_torn(&kept, &rings, &mut locks);
+            lock_where_torn(&candidate, &kept, &rings, &mut locks);
         }
         limit *= opts.shrink.clamp(0.01, 0.99);
     }
@@ -200,12 +200,19 @@ fn lock_where_far(
             mark[v as usize] = true;
         }
     }
+    let marked = (0..mark.len() as u32).filter(|&v| mark[v as usize]);
+    lock_with_rings(marked, rings, locks)
+}
+
+/// Locks `vertices` and one ring around each; returns how many were newly locked.
+fn lock_with_rings(
+    vertices: impl IntoIterator<Item = u32>,
+    rings: &[Vec<u32>],
+    locks: &mut [bool],
+) -> usize {
     let mut added = 0;
-    for v in 0..mark.len() {
-        if !mark[v] {
-            continue;
-        }
-        for u in std::iter::once(v as u32).chain(rings[v].iter().copied()) {
+    for v in vertices {
+        for u in std::iter::once(v).chain(rings[v as usize].iter().copied()) {
             let l = &mut locks[u as usize];
             if !*l {
                 *l = true;
@@ -216,30 +223,25 @@ fn lock_where_far(
     added
 }
 
-/// Locks the vertices of the edges that the triangles `kept` (an index list over the mesh's
-/// vertices) do not share in exactly two triangles, and one ring around them; returns how many
-/// were newly locked.
-fn lock_where_torn(kept: &[u32], rings: &[Vec<u32>], locks: &mut [bool]) -> usize {
-    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in kept.chunks_exact(3) {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
-    let mut added = 0;
-    for (&(a, b), _) in uses.iter().filter(|(_, &n)| n != 2) {
-        for v in [a, b] {
-            for u in std::iter::once(v).chain(rings[v as usize].iter().copied()) {
-                let l = &mut locks[u as usize];
-                if !*l {
-                    *l = true;
-                    added += 1;
-                }
-            }
-        }
-    }
-    added
+/// Locks the vertices of the edges of `candidate` (its triangles `kept`, an index list over the
+/// mesh's vertices) that are not shared by exactly two triangles, and one ring around them;
+/// returns how many were newly locked.
+fn lock_where_torn(
+    candidate: &TriMesh,
+    kept: &[u32],
+    rings: &[Vec<u32>],
+    locks: &mut [bool],
+) -> usize {
+    let map = EdgeMap::new(candidate);
+    let torn: Vec<u32> = (0..map.num_edges())
+        .filter(|&e| map.valence(e) != 2)
+        .flat_map(|e| {
+            let u = map.uses(e)[0];
+            let (f, k) = (3 * u.face as usize, u.slot as usize);
+            [kept[f + k], kept[f + (k + 1) % 3]]
+        })
+        .collect();
+    lock_with_rings(torn, rings, locks)
 }
 
 /// Each vertex's neighbours along the mesh's edges.
@@ -287,6 +289,11 @@ mod tests {
 
     #[test]
     fn torn_edges_lock_their_vertices_and_one_ring() {
+        // The triangles `kept` over 7 vertices, as the simplifier's candidate.
+        let mesh = TriMesh::new(vec![Point3::origin(); 7], Vec::new());
+        let lock_where_torn = |kept: &[u32], rings: &[Vec<u32>], locks: &mut [bool]| {
+            super::lock_where_torn(&compact(&mesh, kept), kept, rings, locks)
+        };
         // A closed tetrahedron (0..4) and a path 4–5–6 on its own: nothing is torn.
         let tetra: Vec<u32> = vec![0, 2, 1, 0, 1, 3, 1, 2, 3, 0, 3, 2];
         let mut rings = vec![Vec::new(); 7];

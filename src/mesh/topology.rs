@@ -311,7 +311,9 @@ pub(crate) struct EdgeSummary {
     pub consistent: bool,
 }
 
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
+/// Union–find root of `x` in `parent` (a forest over 0..n, roots their own parent), halving
+/// the path on the way.
+pub(crate) fn find(parent: &mut [u32], mut x: u32) -> u32 {
     while parent[x as usize] != x {
         let g = parent[parent[x as usize] as usize];
         parent[x as usize] = g;
@@ -320,7 +322,8 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
     x
 }
 
-fn union(parent: &mut [u32], a: u32, b: u32) {
+/// Joins the sets of `a` and `b` (the smaller root becomes the root).
+pub(crate) fn union(parent: &mut [u32], a: u32, b: u32) {
     let (ra, rb) = (find(parent, a), find(parent, b));
     if ra != rb {
         parent[ra.max(rb) as usize] = ra.min(rb);
