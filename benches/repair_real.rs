@@ -32,7 +32,10 @@
 //!   curvature smoothing on every hole, pymeshfix `MeshFix.repair()`, pymeshlab
 //!   `meshing_close_holes` (any hole size); their seconds are the filler call only. The peers'
 //!   packages (reference/requirements-peers.txt) are installed into the oracle's venv on demand;
-//!   without them (or without the venv) the peers are skipped with a notice.
+//!   without them (or without the venv) the peers are skipped with a notice;
+//! - on the chops, MeshLib again as a user runs it, timed as a process like ours:
+//!   reference/meshlib_fill.py (Python start-up, MeshLib's import, its own reader, the same fill,
+//!   its own writer).
 //!
 //! Per output: the symmetric Hausdorff distance to the truth restricted to D (dense barycentric
 //! samples, BVH closest point; benches/common/surface.rs) in units of h, h = the voxel our
@@ -43,7 +46,7 @@
 //! gives for the damaged input. Then per tool: the medians, the cases within 1.5h and 5% and
 //! within 3h, and on how many cases ours beats each peer (smaller Hausdorff in D, as printed to
 //! 2 decimals; ties by |volume error|); and our whole command's time against MeshLib's filler
-//! call on the chops.
+//! call, and against MeshLib's whole run, on the chops.
 //!
 //! Measured 2026-12-04 (late night) after the speed work of that night (the guided fill sampled
 //! adaptively, the winding numbers built once and by translated moments, the cap's polish rounds
@@ -311,6 +314,9 @@ struct CaseResult {
     outcomes: Vec<Option<Outcome>>,
     /// peers.py's wall time (all three peers, Python start-up and imports included).
     peers_script: Option<f64>,
+    /// MeshLib run as a user runs it (reference/meshlib_fill.py: Python start-up, import, its
+    /// own reader, the fill, its own writer), wall seconds; chops only.
+    meshlib_run: Option<f64>,
     /// Our report's NASCET and diameter stenosis for the damaged input (stenosis case).
     stenosis: Option<(Option<f64>, Option<f64>)>,
     /// Our report's timings, "name s" each.
@@ -814,6 +820,17 @@ fn run_peers(python: &Path, dir: &Path) -> (Result<Value, String>, f64) {
     }
 }
 
+/// reference/meshlib_fill.py on the damaged mesh in `dir` (MeshLib as a user runs it, to set
+/// beside our whole command): its wall seconds, or why it failed.
+fn run_meshlib_whole(python: &Path, dir: &Path) -> Result<f64, String> {
+    let mut cmd = Command::new(python);
+    cmd.arg(common::root().join("reference/meshlib_fill.py"))
+        .arg(dir.join("damaged.stl"))
+        .arg(dir.join("meshlib_run.stl"));
+    let (status, secs) = run_limited(&mut cmd, &dir.join("meshlib_run"), TIME_LIMIT);
+    status.map(|()| secs)
+}
+
 /// The oracle's Python with the peers importable, installing reference/requirements-peers.txt
 /// into it when they are missing; None (with a notice) when that fails.
 fn peers_python() -> Option<PathBuf> {
@@ -921,6 +938,15 @@ fn run_case(
         }));
     }
     let mut peers_script = None;
+    let meshlib_run = python
+        .filter(|_| case.kind == Kind::Chop)
+        .and_then(|py| match run_meshlib_whole(py, dir) {
+            Ok(s) => Some(s),
+            Err(e) => {
+                println!("    meshlib_fill.py: {e}");
+                None
+            }
+        });
     match python {
         None => outcomes.extend(PEERS.map(|_| None)),
         Some(py) => {
@@ -980,6 +1006,7 @@ fn run_case(
         input: judge(&case.damaged, truth, &case.region, h, f64::NAN),
         outcomes,
         peers_script,
+        meshlib_run,
         stenosis,
         our_timings,
     }
@@ -1064,6 +1091,9 @@ fn print_vessel_table(results: &[CaseResult], tools: &[&str]) {
         }
         if let Some(s) = r.peers_script {
             notes.push(format!("peers.py whole script {s:.2} s"));
+        }
+        if let Some(s) = r.meshlib_run {
+            notes.push(format!("MeshLib as a user runs it {s:.2} s"));
         }
         println!("  {:<22} {}", "", notes.join("; "));
         if !r.our_timings.is_empty() {
@@ -1157,9 +1187,10 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
             per_kind.join(", ")
         );
     }
-    // Speed on the chops: our whole command against MeshLib's fillHoleNicely call.
+    // Speed on the chops: our whole command against MeshLib's fillHoleNicely call, and against
+    // MeshLib run whole as a user runs it.
     if let Some(m) = tools.iter().position(|t| *t == "meshlib") {
-        let rows: Vec<(f64, f64, f64)> = results
+        let rows: Vec<(f64, f64, f64, f64)> = results
             .iter()
             .filter(|r| r.kind == Kind::Chop)
             .filter_map(|r| {
@@ -1169,13 +1200,18 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
                     ours.seconds,
                     ml.seconds,
                     r.peers_script.unwrap_or(f64::NAN),
+                    r.meshlib_run.unwrap_or(f64::NAN),
                 ))
             })
             .collect();
         if !rows.is_empty() {
-            let ratios: Vec<f64> = rows.iter().map(|(o, m, _)| o / m).collect();
-            let lo = ratios.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = ratios.iter().copied().fold(0.0, f64::max);
+            let spread = |ratios: &[f64]| {
+                let lo = ratios.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = ratios.iter().copied().fold(0.0, f64::max);
+                (median_all(ratios.to_vec()), lo, hi)
+            };
+            let call: Vec<f64> = rows.iter().map(|r| r.0 / r.1).collect();
+            let (call_med, call_lo, call_hi) = spread(&call);
             println!(
                 "  speed on {} chop(s): ours' whole command median {:.2} s ({:.2}–{:.2} s), MeshLib fillHoleNicely median {:.3} s; ratio ours / MeshLib median {:.0}× ({:.0}–{:.0}×); peers.py's whole script (three peers, Python start-up) median {:.2} s",
                 rows.len(),
@@ -1183,11 +1219,27 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
                 rows.iter().map(|r| r.0).fold(f64::INFINITY, f64::min),
                 rows.iter().map(|r| r.0).fold(0.0, f64::max),
                 median_all(rows.iter().map(|r| r.1).collect()),
-                median_all(ratios),
-                lo,
-                hi,
+                call_med,
+                call_lo,
+                call_hi,
                 median_all(rows.iter().map(|r| r.2).collect()),
             );
+            let whole: Vec<f64> = rows
+                .iter()
+                .filter(|r| r.3.is_finite())
+                .map(|r| r.0 / r.3)
+                .collect();
+            if !whole.is_empty() {
+                let (med, lo, hi) = spread(&whole);
+                println!(
+                    "  MeshLib as a user runs it (reference/meshlib_fill.py: Python start-up, import, its own reader, the fill, its own writer) on {} chop(s): median {:.2} s; ratio ours' whole command / that median {:.2}× ({:.2}–{:.2}×)",
+                    whole.len(),
+                    median_all(rows.iter().map(|r| r.3).filter(|s| s.is_finite()).collect()),
+                    med,
+                    lo,
+                    hi,
+                );
+            }
         }
     }
 }

@@ -50,35 +50,20 @@ from oracle import _jsonable, _stdout_to_stderr, close_holes, load_mesh, save_me
 
 TOOLS = ("meshlib", "pymeshfix", "pymeshlab")
 
-# Most edge splits in one fillHoleNicely call (MeshLib's own default is 1000; its tools use
-# 20 000; a 1.5-radius chop of the aorta or an open aorta end needs about 500 at the mean edge).
-MESHLIB_MAX_EDGE_SPLITS = 100_000
-
-
 def run_meshlib(V: np.ndarray, F: np.ndarray) -> dict:
     import meshlib.mrmeshnumpy as mn
-    import meshlib.mrmeshpy as mm
+
+    from meshlib_fill import fill_all, nicely_settings
 
     mesh = mn.meshFromFacesVerts(F.astype(np.int32), V.astype(np.float32))
-    settings = mm.FillHoleNicelySettings()
-    settings.triangulateOnly = False
-    settings.smoothCurvature = True
-    settings.triangulateParams.metric = mm.getUniversalMetric(mesh)
-    settings.triangulateParams.multipleEdgesResolveMode = (
-        mm.FillHoleParams.MultipleEdgesResolveMode.Strong
-    )
-    settings.subdivideSettings.maxEdgeLen = float(mesh.averageEdgeLength())
-    settings.subdivideSettings.maxEdgeSplits = MESHLIB_MAX_EDGE_SPLITS
+    settings = nicely_settings(mesh)
     t = time.perf_counter()
-    holes = mesh.topology.findHoleRepresentiveEdges()
-    new_faces = 0
-    for e in holes:
-        new_faces += mm.fillHoleNicely(mesh, e, settings).count()
+    holes, new_faces = fill_all(mesh, settings)
     seconds = time.perf_counter() - t
     mesh.pack()
     return {
         "seconds": seconds,
-        "holes": len(holes),
+        "holes": holes,
         "new_faces": new_faces,
         "V": np.asarray(mn.getNumpyVerts(mesh), np.float64),
         "F": np.asarray(mn.getNumpyFaces(mesh.topology), np.int64),

@@ -95,6 +95,17 @@ impl Default for WindingOptions {
     }
 }
 
+impl WindingOptions {
+    /// For telling inside from outside, where only the side of ½ matters: order 2, β = 2
+    /// (Barill et al.'s setting; largest error 9e-3 on the project's real meshes, far from the
+    /// ½ a side test compares with; about three times faster to build and to query than the
+    /// default).
+    pub const SIDES: WindingOptions = WindingOptions {
+        beta: 2.0,
+        order: 2,
+    };
+}
+
 /// Highest supported order of the expansion.
 const MAX_ORDER: usize = 5;
 /// Length of a flat array holding every monomial (or polynomial coefficient) of degree 0 to n − 1.
@@ -509,8 +520,8 @@ fn build_expansions(
             kept.insert(n, m);
         }
     }
-    // The large nodes, children first: the area-weighted centre from the children's, the
-    // moments translated there, the radius over the subtree's corners.
+    // The large nodes, children first: the area-weighted centre from the children's and the
+    // moments translated there.
     let mut area = vec![0.0; nodes.len()];
     let mut corners_sum = vec![Vector3::zeros(); nodes.len()];
     for &n in pre.iter().rev() {
@@ -531,8 +542,8 @@ fn build_expansions(
         };
         (area[n], corners_sum[n]) = (a, v);
     }
-    let mut slots = Vec::new();
-    for &n in pre.iter().rev().filter(|&&n| !direct(n)) {
+    let large: Vec<usize> = pre.iter().rev().copied().filter(|&n| !direct(n)).collect();
+    for &n in &large {
         let [l, r] = children(n);
         let total = area[l] + area[r];
         let center = if total > 0.0 {
@@ -547,17 +558,29 @@ fn build_expansions(
                 .expect("a child's moments are kept for its parent");
             translate_moments_add(&m, &(far[c].center - center), order, &mut moments);
         }
-        subtree_slots(bvh, n, &mut slots);
-        let r2max = slots
-            .iter()
-            .flat_map(|&s| bvh.tris[s].iter())
-            .map(|p| (p.coords - center).norm_squared())
-            .fold(0.0, f64::max);
-        far[n] = record(n, center, r2max);
+        // The radius later (below), over the subtree's corners.
+        far[n] = record(n, center, 0.0);
         let mut c = Vec::with_capacity(len);
         expansion_coefficients(&moments, order, &mut c);
         coefs[n * len..(n + 1) * len].copy_from_slice(&c);
         kept.insert(n, Box::new(moments));
+    }
+    // Each large node's radius over its subtree's corners (a scan of the subtree each), in
+    // parallel.
+    let radii: Vec<f64> = large
+        .par_iter()
+        .map_init(Vec::new, |slots, &n| {
+            subtree_slots(bvh, n, slots);
+            let center = far[n].center;
+            slots
+                .iter()
+                .flat_map(|&s| bvh.tris[s].iter())
+                .map(|p| (p.coords - center).norm_squared())
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    for (&n, r2max) in large.iter().zip(radii) {
+        far[n].far2 = far2(r2max);
     }
     (far, coefs)
 }

@@ -84,7 +84,7 @@ impl<'a> RepairChecks<'a> {
                 }
             }
         }
-        let winding = WindingNumber::new(input, WindingOptions::default());
+        let winding = WindingNumber::new(input, WindingOptions::SIDES);
         RepairChecks {
             balls,
             reach,
@@ -99,13 +99,15 @@ impl<'a> RepairChecks<'a> {
         }
     }
 
-    /// The input's fast winding number (default options), built once by [`RepairChecks::new`].
+    /// The input's fast winding number (`WindingOptions::SIDES`), built once by
+    /// [`RepairChecks::new`].
     pub fn into_input_winding(self) -> WindingNumber {
         self.input_winding
     }
 
     /// Checks `output` (the repaired, closed surface). Err names the first check that failed;
-    /// Ok gives the output's fast winding number (default options), which the checks build.
+    /// Ok gives the output's fast winding number (`WindingOptions::SIDES`), which the checks
+    /// build.
     pub fn check(&self, output: &TriMesh) -> Result<WindingNumber, String> {
         let (mean, longest_near) = (self.mean, self.longest_near);
         let volume = signed_volume(output);
@@ -137,7 +139,7 @@ impl<'a> RepairChecks<'a> {
                 }
             }
         }
-        let winding = WindingNumber::new(output, WindingOptions::default());
+        let winding = WindingNumber::new(output, WindingOptions::SIDES);
         let eps = 0.1 * mean.min(self.reach / 3.0);
         // Evenly strided faces, at most SIDE_SAMPLES: a slit, fin or pocket spans many faces.
         let stride = near_faces.len().div_ceil(SIDE_SAMPLES).max(1);

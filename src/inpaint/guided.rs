@@ -1435,34 +1435,52 @@ impl GuideTube {
     /// Signed distance (to first order) from `x` to the tube.
     pub fn distance(&self, x: &Point3<f64>) -> f64 {
         // The nearest sample (the first of equals, as a scan in order gives), skipping the
-        // runs whose bounding sphere is farther than the best so far.
+        // runs whose bounding sphere is farther than the best so far; the run whose sphere is
+        // nearest is scanned first, so that most others are skipped.
         // Far from the curve (beyond twice the widest section) only the sign matters: a lower
         // bound of the distance is returned, without the search.
         let widest = self.widest;
-        let nearest_chunk = self
-            .chunks
-            .iter()
-            .map(|(c, r)| ((x - c).norm() - r).max(0.0))
-            .fold(f64::INFINITY, f64::min);
+        let lower_bound = |k: usize| {
+            let (c, r) = &self.chunks[k];
+            ((x - c).norm() - r).max(0.0)
+        };
+        // The runs' lower bounds, kept for the second pass (the first LOWS runs).
+        const LOWS: usize = 64;
+        let mut lows = [0.0; LOWS];
+        let (mut k0, mut nearest_chunk) = (0, f64::INFINITY);
+        for k in 0..self.chunks.len() {
+            let lower = lower_bound(k);
+            if k < LOWS {
+                lows[k] = lower;
+            }
+            if lower < nearest_chunk {
+                (k0, nearest_chunk) = (k, lower);
+            }
+        }
         if nearest_chunk > 2.0 * widest {
             return nearest_chunk - widest;
         }
-        let (mut i, mut best) = (0, f64::INFINITY);
-        for (k, (c, r)) in self.chunks.iter().enumerate() {
-            let lower = ((x - c).norm() - r).max(0.0);
-            if lower * lower > best {
-                continue;
-            }
+        // The nearest run first: its best bounds the others, most of which are then skipped.
+        let (mut i, mut best) = (usize::MAX, f64::INFINITY);
+        let scan = |k: usize, i: &mut usize, best: &mut f64| {
             let from = k * CHUNK;
             for (j, p) in self.points[from..(from + CHUNK).min(self.points.len())]
                 .iter()
                 .enumerate()
             {
                 let d = (x - p).norm_squared();
-                if d < best {
-                    (i, best) = (from + j, d);
+                if d < *best || (d == *best && from + j < *i) {
+                    (*i, *best) = (from + j, d);
                 }
             }
+        };
+        scan(k0, &mut i, &mut best);
+        for k in 0..self.chunks.len() {
+            let lower = if k < LOWS { lows[k] } else { lower_bound(k) };
+            if k == k0 || lower * lower > best {
+                continue;
+            }
+            scan(k, &mut i, &mut best);
         }
         let [t, e1, e2] = self.frames[i];
         let v = x - self.points[i];

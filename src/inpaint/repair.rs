@@ -210,7 +210,7 @@ pub struct Repair {
     pub notices: Vec<String>,
     /// Seconds per phase.
     pub timings: Vec<(String, f64)>,
-    /// The fast winding numbers (default options) of `closed_input` and `mesh` that the
+    /// The fast winding numbers (`WindingOptions::SIDES`) of `closed_input` and `mesh` that the
     /// self-checks built, for the report to measure with; `None` where no check ran (re-meshed
     /// whole, ends kept open).
     pub windings: Option<(WindingNumber, WindingNumber)>,
@@ -548,14 +548,19 @@ pub fn repair_with_centerline(
         )?;
     }
     lap("fill", &mut timings);
-    let patch = extract_surface(&psi, &ExtractOptions::default())?;
     // Stitched into the kept triangles, or (without keep_outside, or when that fails) the whole
     // vessel re-meshed. Every cut depth is tried until a stitch passes the self-checks
     // (`checks`: no face inside the solid, no long stitch edges, outward, no volume lost in D;
-    // they need a closed result).
-    let mut checks = None;
+    // they need a closed result). What the checks measure on the input, meanwhile.
+    let (patch, checks) = rayon::join(
+        || extract_surface(&psi, &ExtractOptions::default()),
+        || {
+            (opts.keep_outside && cut.open_edges == 0)
+                .then(|| RepairChecks::new(&closed_input, balls, 3.0 * h))
+        },
+    );
+    let patch = patch?;
     let stitch = opts.keep_outside.then(|| {
-        checks = (cut.open_edges == 0).then(|| RepairChecks::new(&closed_input, balls, 3.0 * h));
         stitch_patch_checked(
             &cut,
             &patch,

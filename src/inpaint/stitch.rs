@@ -39,16 +39,27 @@ pub(crate) fn submesh(mesh: &TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> (TriM
 /// The boundary loops of `mesh` that `keep` selects, each turned so that consecutive vertices
 /// a→b are a directed edge of a face.
 fn directed_loops(mesh: &TriMesh, keep: impl Fn(&[u32]) -> bool) -> Vec<Vec<u32>> {
-    let directed: HashSet<(u32, u32)> = mesh
+    let loops: Vec<Vec<u32>> = boundary_loops(mesh)
+        .into_iter()
+        .filter(|lp| keep(lp))
+        .collect();
+    // Which of the loops' first edges some face holds in that direction (one pass over the
+    // faces, looking up only those few edges).
+    let firsts: HashSet<(u32, u32)> = loops
+        .iter()
+        .filter(|lp| lp.len() >= 2)
+        .map(|lp| (lp[0], lp[1]))
+        .collect();
+    let along: HashSet<(u32, u32)> = mesh
         .faces
         .iter()
         .flat_map(|f| (0..3).map(move |k| (f[k], f[(k + 1) % 3])))
+        .filter(|e| firsts.contains(e))
         .collect();
-    boundary_loops(mesh)
+    loops
         .into_iter()
-        .filter(|lp| keep(lp))
         .map(|lp| {
-            if lp.len() >= 2 && directed.contains(&(lp[0], lp[1])) {
+            if lp.len() >= 2 && along.contains(&(lp[0], lp[1])) {
                 lp
             } else {
                 lp.into_iter().rev().collect()

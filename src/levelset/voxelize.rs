@@ -69,10 +69,7 @@ impl Default for VoxelizeOptions {
         VoxelizeOptions {
             band: 3.0,
             far: FarFill::Clamp,
-            winding: WindingOptions {
-                beta: 2.0,
-                order: 2,
-            },
+            winding: WindingOptions::SIDES,
             seed_stride: 8,
         }
     }

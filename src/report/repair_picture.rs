@@ -431,7 +431,7 @@ fn repaired_scene<'a>(
         .collect();
     let bvh = MeshBvh::new(&TriMesh::new(before.vertices.clone(), near));
     let faces = shown(after, view, balls)
-        .into_iter()
+        .into_par_iter()
         .map(|f| {
             let added = bvh
                 .closest_point_within(&centroid(after, &f), reach)

@@ -152,7 +152,7 @@ pub const DETECTED_STENOSIS: &str = "detected stenosis";
 /// The per-region figures for `balls` (with their `sources`), `input` being the measured input
 /// (capped) and `output` the repaired mesh; the stenosis along `healthy` (the input's centreline)
 /// where it has measured points in the region, else across the region's sections. `windings`:
-/// the input's and output's fast winding numbers (default options) when already built.
+/// the input's and output's fast winding numbers (`WindingOptions::SIDES`) when already built.
 pub fn region_reports(
     input: &TriMesh,
     output: &TriMesh,
@@ -161,7 +161,7 @@ pub fn region_reports(
     healthy: Option<&HealthyVessel>,
     windings: Option<[&WindingNumber; 2]>,
 ) -> Vec<RegionReport> {
-    let opts = WindingOptions::default();
+    let opts = WindingOptions::SIDES;
     let built;
     let [win_in, win_out] = match windings {
         Some(w) => w,

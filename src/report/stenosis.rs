@@ -51,7 +51,7 @@ pub fn volume_in_ball(mesh: &TriMesh, ball: &Ball) -> f64 {
     if !ball_is_valid(ball) || mesh.faces.is_empty() {
         return 0.0;
     }
-    let winding = WindingNumber::new(mesh, WindingOptions::default());
+    let winding = WindingNumber::new(mesh, WindingOptions::SIDES);
     volume_in_ball_with(mesh, &winding, ball)
 }
 
@@ -730,8 +730,8 @@ pub fn measure_stenosis(
 ) -> Result<StenosisReport> {
     check_mesh(input, "input")?;
     check_mesh(output, "output")?;
-    let wi = WindingNumber::new(input, WindingOptions::default());
-    let wo = WindingNumber::new(output, WindingOptions::default());
+    let wi = WindingNumber::new(input, WindingOptions::SIDES);
+    let wo = WindingNumber::new(output, WindingOptions::SIDES);
     measure_stenosis_with(input, &wi, output, &wo, ball, opts)
 }
 
