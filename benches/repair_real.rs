@@ -938,15 +938,15 @@ fn run_case(
         }));
     }
     let mut peers_script = None;
-    let meshlib_run = python
-        .filter(|_| case.kind == Kind::Chop)
-        .and_then(|py| match run_meshlib_whole(py, dir) {
+    let meshlib_run = python.filter(|_| case.kind == Kind::Chop).and_then(|py| {
+        match run_meshlib_whole(py, dir) {
             Ok(s) => Some(s),
             Err(e) => {
                 println!("    meshlib_fill.py: {e}");
                 None
             }
-        });
+        }
+    });
     match python {
         None => outcomes.extend(PEERS.map(|_| None)),
         Some(py) => {
