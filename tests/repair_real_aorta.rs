@@ -11,6 +11,9 @@
 //! over the hole were a harmonic fill, before `wall_chart`'s biharmonic one; 3.22h / +8.6%
 //! before the intact wall around a hole was kept and read, `known_wall`); capped (inward) aorta
 //! 0.84h / +0.0% (1.28h harmonic, 1.75h before). Issue 21 asks for 1.5h: met on both.
+//! Measured 2026-12-05, the wall chart's rays going on past the hole's cap: open aorta 1.18h /
+//! −1.4%, capped aorta 0.69h / +0.2%; the open aorta's hole beside its bifurcation 2.46h / +1.3%
+//! (3.20h before the junction's balls were bounded by its inscribed sphere).
 
 mod common;
 
@@ -136,6 +139,25 @@ fn a_hole_in_the_open_aorta_is_filled_without_a_slit() {
     assert!(ve.abs() <= 0.03, "{ve}");
 }
 
+/// The benchmark's chop#2 of the open aorta: a hole whose region D reaches over the aortic
+/// bifurcation, so the fill is a junction of three tubes closed by balls at the junction point.
+/// The aorta's ball (7.7 mm, its anchor's radius) stood 1.2 mm outside the intact wall beside
+/// the hole (3.20h); bounded by the junction's inscribed sphere (5.7 mm) it is within 2.5h.
+#[test]
+fn a_hole_beside_the_aortic_bifurcation_stays_within_3h() {
+    let dir = tempfile::tempdir().unwrap();
+    let (hd, ve, report) = chop_and_repair(
+        "aorta_abdominal_open_ends.stl",
+        [222.56062162145258, 149.9970286039105, 30.50383559546181],
+        14.567503951015059 / 1.3,
+        dir.path(),
+    );
+    assert_eq!(report["parameters"]["guides"][0], "junction", "{report}");
+    // Issue 21 asks every case within 3h (2.48h measured; 3.20h before).
+    assert!(hd <= 3.0, "{hd}h");
+    assert!(ve.abs() <= 0.05, "{ve}");
+}
+
 #[test]
 fn the_inward_capped_aorta_is_repaired_outward() {
     let dir = tempfile::tempdir().unwrap();
@@ -152,8 +174,10 @@ fn the_inward_capped_aorta_is_repaired_outward() {
     );
     let notices = report["notices"].to_string();
     assert!(notices.contains("faced inward"), "{notices}");
-    // Issue 21 asks for 1.5h (0.84h measured); the damaged input is 20.2h / −11.9%.
-    assert!(hd <= 1.5, "{hd}h");
+    // Issue 21 asks for 1.5h (0.69h measured; 0.84h while the wall chart's rays stopped at the
+    // hole's cap, which hides intact wall beside a rim that is not planar); the damaged input is
+    // 20.2h / −11.9%.
+    assert!(hd <= 0.75, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
 }
 

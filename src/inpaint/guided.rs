@@ -29,12 +29,15 @@
 //!    to all anchor axes in least squares), along a Hermite curve that leaves the junction the
 //!    way the damaged centreline does (the graph walked from the anchor's branch to that
 //!    junction; unless the anchor's tangent already points at the junction: a straight vessel,
-//!    whose centreline a cap bends), end there in a round cap and are joined by a smooth
-//!    minimum of a quarter radius (the fillet of a carina); a single one beside a vessel that
-//!    crosses D is a side branch, continued to that vessel's curve where its axis meets it and
-//!    joined the same way; a single one alone is bridged to the branch's open vessel end (the
-//!    centre of a cut across the vessel, outside the damage) and cut flat there, or, where the
-//!    branch ends closed, continued along its own damaged centreline and capped round.
+//!    whose centreline a cap bends), end there in a round cap (a ball no wider than the
+//!    junction's inscribed sphere, unless that sphere rests on a hole's cap: the parent's own
+//!    radius stood 1.2 mm out of the wall beside the aortic bifurcation) and are joined by a
+//!    smooth minimum of a quarter radius (the fillet of a carina); a single one beside a
+//!    vessel that crosses D is a side branch, continued to that vessel's curve where its axis
+//!    meets it and joined the same way; a single one alone is bridged to the branch's open
+//!    vessel end (the centre of a cut across the vessel, outside the damage) and cut flat there,
+//!    or, where the branch ends closed, continued along its own damaged centreline and capped
+//!    round.
 //! 3. **Sections.** Along a curve, a rotation-minimising frame (double reflection, Wang, Jüttler,
 //!    Zheng and Liu 2008) is carried from the first anchor; the section at arc-length fraction w
 //!    is (1 − w)·ρ_A(θ) + w·ρ_B(θ), both profiles read in the carried frame, so a tapering or
@@ -44,7 +47,8 @@
 //!    D (issue 21's "details carried across D"; faded out towards a junction point, and not read
 //!    within a junction's flare, whose wall is no single vessel's). Around a hole (a group of
 //!    balls holding a cap's rim, [`HoleCaps`]), every tube also reads the wall inside D wherever
-//!    its ray meets the input's own triangles rather than the cap, within a junction's flare
+//!    its ray meets the input's own triangles rather than the cap (a ray goes on past the cap,
+//!    which beside a rim that is not planar hides intact wall), within a junction's flare
 //!    too (on the branches of the tube's anchors: a gap's two ends may lie on two): that wall
 //!    is intact. The offsets over the hole are then the biharmonic interpolation of the
 //!    readings on the tube's wall chart (arc length × arc of the section; `wall_chart`), so the
@@ -65,7 +69,7 @@ use super::adaptive::{sample_adaptive, AdaptiveOptions};
 use super::junction::{junction_point, smooth_min, Branch as AxisBranch};
 use super::region::Ball;
 use super::wall_chart::fill_biharmonic;
-use crate::bvh::MeshBvh;
+use crate::bvh::{MeshBvh, RayHit};
 use crate::centerline::{Centerline, EndKind};
 use crate::grid::Grid3;
 use nalgebra::{Point3, Vector3};
@@ -136,6 +140,8 @@ pub struct GuideTube {
     pub end_profile: Vec<f64>,
     /// How the last sample ends the tube (the first is always an anchor: open).
     pub end_cap: EndCap,
+    /// Radius of the ball that closes a round end, world units.
+    pub cap_radius: f64,
     /// The wall's offset from the interpolated section at each sample and ray angle (sample-major,
     /// world units): the details of the wall around D carried across it.
     pub detail: Vec<f64>,
@@ -479,7 +485,7 @@ fn plan_group(
     // A branch continued from its anchor to the point `j` (a junction), capped there; it
     // leaves j along `leave` (the damaged centreline's path from j to the anchor) where known,
     // else straight towards the anchor.
-    let to_point = |a: &Anchor, j: Point3<f64>, leave: Option<Vector3<f64>>| {
+    let to_point = |a: &Anchor, j: Point3<f64>, leave: Option<Vector3<f64>>, cap: f64| {
         let end = Anchor {
             point: j,
             into: leave.unwrap_or_else(|| (a.point - j).try_normalize(1e-12).unwrap_or(-a.into)),
@@ -488,14 +494,16 @@ fn plan_group(
             branch: None,
             index: 0,
         };
-        make_tube(
+        let mut tube = make_tube(
             &sections,
             hermite(a, &end, spacing),
             a,
             None,
             EndCap::Round,
             false,
-        )
+        );
+        tube.cap_radius = tube.cap_radius.min(cap);
+        tube
     };
     // A run through E joins its two anchors (a vessel crossing D, or clipped by it); the
     // anchors left over are the vessel's ends inside D, joined below.
@@ -522,7 +530,7 @@ fn plan_group(
                 .min_by(|p, q| axis_distance(&a, p).total_cmp(&axis_distance(&a, q)))
                 .copied()
                 .expect("tubes have points");
-            tubes.push(to_point(&a, j, None));
+            tubes.push(to_point(&a, j, None, f64::INFINITY));
             kinds.push(GuideKind::Junction);
         }
         1 => {
@@ -605,18 +613,35 @@ fn plan_group(
                     radius: a.radius,
                 })
                 .collect();
-            let j = centerline
+            let found = centerline
                 .junctions
                 .iter()
-                .map(|j| j.position)
-                .filter(|p| in_e(p))
-                .min_by(|a, b| (a - centroid).norm().total_cmp(&(b - centroid).norm()))
+                .filter(|q| in_e(&q.position))
+                .min_by(|a, b| {
+                    (a.position - centroid)
+                        .norm()
+                        .total_cmp(&(b.position - centroid).norm())
+                });
+            let j = found
+                .map(|q| q.position)
                 .or_else(|| junction_point(&axes).filter(|p| in_e(p)))
                 .unwrap_or(centroid);
+            // The junction's inscribed sphere bounds the balls that close the branches there,
+            // unless the sphere rests on a hole's cap (the damage is at the junction: the
+            // sphere is then smaller than the vessel's).
+            let on_cap = |q: &crate::centerline::Junction| {
+                sections.cap.as_ref().is_some_and(|faces| {
+                    let near = sections.bvh.closest_point(&q.position);
+                    faces.contains(&(near.face as usize))
+                })
+            };
+            let cap = found
+                .filter(|q| !on_cap(q))
+                .map_or(f64::INFINITY, |q| q.radius);
             for (&i, a) in single.iter().zip(&anchors) {
                 let leave = leaving_direction(centerline, &stubs[i], &j)
                     .map(|l| junction_tangent(a, &j, &l));
-                tubes.push(to_point(a, j, leave));
+                tubes.push(to_point(a, j, leave, cap));
                 kinds.push(GuideKind::Junction);
             }
         }
@@ -926,6 +951,29 @@ impl Sections<'_> {
             .all(|(i, b)| own.contains(&i) || mine <= dist(b) + 0.25 * radius)
     }
 
+    /// The first hit of the ray from `c` along the unit `d` within `t_max` that is not a hole's
+    /// cap: a cap spans its hole inside the lumen, and where the hole's rim is not planar it
+    /// hides the intact wall next to the rim from rays that pass through it; the ray goes on
+    /// past it (past at most a few caps). Without caps, the first hit.
+    fn past_caps(&self, c: &Point3<f64>, d: &Vector3<f64>, t_max: f64) -> Option<RayHit> {
+        let is_cap = |face: u32| {
+            self.cap
+                .as_ref()
+                .is_some_and(|cap| cap.contains(&(face as usize)))
+        };
+        let step = 1e-6 * t_max;
+        let mut start = 0.0;
+        for _ in 0..4 {
+            let mut hit = self.bvh.cast_ray(&(c + d * start), d, t_max - start)?;
+            hit.t += start;
+            if !is_cap(hit.face) {
+                return Some(hit);
+            }
+            start = hit.t + step;
+        }
+        None
+    }
+
     /// The wall's distance from `c` along `rays` directions in the plane of `frame` (angles
     /// 2πj/rays from frame[1] towards frame[2]), on the anchor's branch. A ray that misses,
     /// goes beyond 4 radii or ends on another branch's wall (the section cuts a junction) is
@@ -1048,7 +1096,7 @@ impl Sections<'_> {
                     if !known_inside && self.in_flare(c, rho) {
                         return None;
                     }
-                    let hit = self.bvh.cast_ray(c, &d, 1.5 * rho)?;
+                    let hit = self.past_caps(c, &d, 1.5 * rho)?;
                     let wall = c + d * hit.t;
                     (hit.t > 0.0
                         && (hit.t - rho).abs() < 0.5 * rho
@@ -1420,6 +1468,7 @@ fn make_tube(
         .chain(&end_profile)
         .fold(0.0, |m: f64, &r| m.max(r))
         + detail.iter().fold(0.0, |m: f64, &d| m.max(d));
+    let end_profile_mean = end_profile.iter().sum::<f64>() / end_profile.len() as f64;
     GuideTube {
         points,
         frames,
@@ -1427,6 +1476,7 @@ fn make_tube(
         start_profile,
         end_profile,
         end_cap,
+        cap_radius: end_profile_mean,
         detail,
         chunks,
         widest,
@@ -1513,7 +1563,7 @@ impl GuideTube {
         let last = i + 1 == self.points.len();
         let beyond = last && along > 0.0 && self.end_cap == EndCap::Round;
         if beyond {
-            return v.norm() - self.mean_radius(last);
+            return v.norm() - self.cap_radius;
         }
         let perp = v - t * along;
         let theta = perp.dot(&e2).atan2(perp.dot(&e1));
