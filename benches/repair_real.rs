@@ -76,13 +76,14 @@
 //! every case 0.35–0.99 s (the aneurysm's narrowing the slowest: 0.91–1.01 s over four runs at
 //! load 1.2–1.8); on a chop median 0.51 s (0.37–0.86 s) against MeshLib's filler call 0.011 s
 //! (61×, 21–121×) and against MeshLib run whole as a user runs it (reference/meshlib_fill.py)
-//! 0.43 s (1.28×, 0.91–2.00×). Still above 3h: the carotid's narrowing next to its external carotid's
-//! origin (4.88h, +13.6%: the two narrowings' regions merge around the bifurcation, each branch
-//! becomes a tube to the junction at its anchor's radius, and the internal carotid's, 2.18 mm
-//! all along its 20 mm run, is wider than the vessel and reaches into the crotch; the natural
-//! narrowing at the origin is widened too), the aneurysm's ICA narrowing (4.10h, −13.3%: the
-//! truth widens across the lesion), the capped aorta's chop over the carina (3.71h: the damaged
-//! centreline's junction lies 5 mm upstream of the true one). Per case:
+//! 0.43 s (1.28×, 0.91–2.00×). Still above 3h: the carotid's narrowing next to its external
+//! carotid's origin (4.88h, +13.6%: the two narrowings' regions merge around the bifurcation,
+//! each branch becomes a tube to the junction at its anchor's radius, and the internal
+//! carotid's, 2.18 mm all along its 20 mm run, is wider than the vessel and reaches into the
+//! crotch; the natural narrowing at the origin is widened too), the aneurysm's ICA narrowing
+//! (4.10h, −13.3%: the truth widens across the lesion), the capped aorta's chop over the
+//! carina (3.71h: the damaged centreline's junction lies 5 mm upstream of the true one). Per
+//! case:
 //!
 //! | vessel | case | ours h / vol | ours s | MeshLib | pymeshfix | pymeshlab |
 //! |---|---|---|---|---|---|---|
