@@ -1245,7 +1245,7 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
             if !whole.is_empty() {
                 let (med, lo, hi) = spread(&whole);
                 println!(
-                    "  MeshLib as a user runs it (reference/meshlib_fill.py: Python start-up, import, its own reader, the fill, its own writer) on {} chop(s): median {:.2} s; ratio ours' whole command / that median {:.2}× ({:.2}–{:.2}×)",
+                    "  MeshLib as a user runs it (reference/meshlib_fill.py: Python start-up, import, its own reader, the fill, its own writer) on {} chop(s): median {:.2} s; ratio ours' whole command / MeshLib's whole run, per chop: median {:.2}× ({:.2}–{:.2}×)",
                     whole.len(),
                     median_all(rows.iter().map(|r| r.3).filter(|s| s.is_finite()).collect()),
                     med,

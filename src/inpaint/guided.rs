@@ -152,6 +152,11 @@ pub struct GuideTube {
     widest: f64,
 }
 
+/// The mean of a section profile's radii, world units.
+fn mean(profile: &[f64]) -> f64 {
+    profile.iter().sum::<f64>() / profile.len() as f64
+}
+
 /// Curve samples per bounding sphere of [`GuideTube::distance`]'s search.
 const CHUNK: usize = 16;
 
@@ -272,7 +277,7 @@ pub fn plan_guides(
             let fillet = 0.25
                 * tubes
                     .iter()
-                    .map(|t| t.mean_radius(false))
+                    .map(|t| mean(&t.start_profile))
                     .fold(f64::INFINITY, f64::min);
             out.push(RegionGuide {
                 balls: group,
@@ -951,22 +956,24 @@ impl Sections<'_> {
             .all(|(i, b)| own.contains(&i) || mine <= dist(b) + 0.25 * radius)
     }
 
+    /// Whether `face` is one of the holes' cap triangles (false without caps).
+    fn is_cap(&self, face: u32) -> bool {
+        self.cap
+            .as_ref()
+            .is_some_and(|cap| cap.contains(&(face as usize)))
+    }
+
     /// The first hit of the ray from `c` along the unit `d` within `t_max` that is not a hole's
     /// cap: a cap spans its hole inside the lumen, and where the hole's rim is not planar it
     /// hides the intact wall next to the rim from rays that pass through it; the ray goes on
     /// past it (past at most a few caps). Without caps, the first hit.
     fn past_caps(&self, c: &Point3<f64>, d: &Vector3<f64>, t_max: f64) -> Option<RayHit> {
-        let is_cap = |face: u32| {
-            self.cap
-                .as_ref()
-                .is_some_and(|cap| cap.contains(&(face as usize)))
-        };
         let step = 1e-6 * t_max;
         let mut start = 0.0;
         for _ in 0..4 {
             let mut hit = self.bvh.cast_ray(&(c + d * start), d, t_max - start)?;
             hit.t += start;
-            if !is_cap(hit.face) {
+            if !self.is_cap(hit.face) {
                 return Some(hit);
             }
             start = hit.t + step;
@@ -1061,14 +1068,8 @@ impl Sections<'_> {
         // Through a hole's ball, a tube also reads the intact wall inside D (every face but the
         // cap's).
         let known_inside = self.cap.is_some();
-        let known_wall = |p: &Point3<f64>, face: u32| {
-            outside_e(p)
-                || (known_inside
-                    && self
-                        .cap
-                        .as_ref()
-                        .is_some_and(|cap| !cap.contains(&(face as usize))))
-        };
+        let known_wall =
+            |p: &Point3<f64>, face: u32| outside_e(p) || (known_inside && !self.is_cap(face));
         let read: Vec<Option<f64>> = (0..points.len())
             .into_par_iter()
             .flat_map_iter(|i| {
@@ -1239,9 +1240,9 @@ impl Sections<'_> {
     ) -> Vec<Point3<f64>> {
         let n = points.len();
         let m = self.rays;
-        let Some(cap) = self.cap.as_ref() else {
+        if self.cap.is_none() {
             return points;
-        };
+        }
         if n < 3 || !(radius > 0.0) {
             return points;
         }
@@ -1261,7 +1262,7 @@ impl Sections<'_> {
                     };
                     let wall = c + d * hit.t;
                     if (hit.t - radius).abs() < 0.5 * radius
-                        && !cap.contains(&(hit.face as usize))
+                        && !self.is_cap(hit.face)
                         && self.on_branch(&wall, own, radius)
                     {
                         known.push((hit.t * th.cos(), hit.t * th.sin()));
@@ -1468,7 +1469,7 @@ fn make_tube(
         .chain(&end_profile)
         .fold(0.0, |m: f64, &r| m.max(r))
         + detail.iter().fold(0.0, |m: f64, &d| m.max(d));
-    let end_profile_mean = end_profile.iter().sum::<f64>() / end_profile.len() as f64;
+    let cap_radius = mean(&end_profile);
     GuideTube {
         points,
         frames,
@@ -1476,7 +1477,7 @@ fn make_tube(
         start_profile,
         end_profile,
         end_cap,
-        cap_radius: end_profile_mean,
+        cap_radius,
         detail,
         chunks,
         widest,
@@ -1498,15 +1499,6 @@ impl GuideTube {
         a * (1.0 - w) + b * w + d[j] * (1.0 - f) + d[k] * f
     }
 
-    fn mean_radius(&self, last: bool) -> f64 {
-        let p = if last {
-            &self.end_profile
-        } else {
-            &self.start_profile
-        };
-        p.iter().sum::<f64>() / p.len() as f64
-    }
-
     /// Signed distance (to first order) from `x` to the tube.
     pub fn distance(&self, x: &Point3<f64>) -> f64 {
         // The nearest sample (the first of equals, as a scan in order gives), skipping the
@@ -1525,8 +1517,8 @@ impl GuideTube {
         let (mut k0, mut nearest_chunk) = (0, f64::INFINITY);
         for k in 0..self.chunks.len() {
             let lower = lower_bound(k);
-            if k < LOWS {
-                lows[k] = lower;
+            if let Some(slot) = lows.get_mut(k) {
+                *slot = lower;
             }
             if lower < nearest_chunk {
                 (k0, nearest_chunk) = (k, lower);
@@ -1551,7 +1543,7 @@ impl GuideTube {
         };
         scan(k0, &mut i, &mut best);
         for k in 0..self.chunks.len() {
-            let lower = if k < LOWS { lows[k] } else { lower_bound(k) };
+            let lower = lows.get(k).copied().unwrap_or_else(|| lower_bound(k));
             if k == k0 || lower * lower > best {
                 continue;
             }
