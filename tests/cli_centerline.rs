@@ -217,11 +217,20 @@ fn repair_measures_along_the_centerline() {
         g["diameter_stenosis_pct"], g["nascet_stenosis_pct"]
     );
     assert!(g["diameter_stenosis_pct"].as_f64().unwrap().abs() < 5.0);
-    // A point picked in the narrowing is sized by the healthy radius (1.5 R), not the narrowed.
+    // A point picked in the narrowing takes the narrowing's region: its width at half depth
+    // plus a healthy radius (at least 1.5 healthy radii), on the centreline at its throat,
+    // measured there.
     let picked = d.join("pick.json");
     std::fs::write(&picked, r#"{"points": [[0, 1.6, 0]]}"#).unwrap();
     let r = repair(&[s(&damaged), "--regions", s(&picked)]);
-    let radius = r["regions"][0]["radius"].as_f64().unwrap();
-    println!("picked point: region radius {radius:.3} (1.5 x healthy {healthy_radius})");
-    assert!((radius - 1.5 * healthy_radius).abs() <= 0.15 * healthy_radius);
+    let g = &r["regions"][0];
+    let radius = g["radius"].as_f64().unwrap();
+    let nascet = g["nascet_stenosis_pct"].as_f64().unwrap();
+    println!(
+        "picked point: {} region radius {radius:.3} (healthy {healthy_radius}), NASCET {nascet:.2}%",
+        g["source"]
+    );
+    assert_eq!(g["source"], "picked stenosis");
+    assert!(radius >= 1.5 * healthy_radius && radius <= 5.0 * healthy_radius);
+    assert!((nascet - 50.0).abs() <= 5.0);
 }

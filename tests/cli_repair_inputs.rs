@@ -140,7 +140,7 @@ fn markups_drive_a_repair() {
     let d = dir.path();
     let (damaged, _, _) = common::phantom("stenosis", d);
     // A point picked in the narrowing (mesh frame), as a regions file, a RAS .mrk.json and an
-    // LPS .fcsv: the same region, the same repair.
+    // LPS .fcsv: the same region, the same repair: the narrowing's, as --stenoses finds it.
     let picked = [0.0, 1.6, 0.0];
     let files = [
         ("pick.json", format!("{{\"points\": [{picked:?}]}}")),
@@ -161,7 +161,7 @@ fn markups_drive_a_repair() {
             "{name}: centre {} radius {} inpainted {} stenosis {}%",
             g["center"], g["radius"], g["inpainted_volume"], g["diameter_stenosis_pct"]
         );
-        assert!(g["source"].as_str().unwrap().contains(name));
+        assert_eq!(g["source"], "picked stenosis");
         assert_eq!(r["watertight"], true);
         seen.push((
             g["center"].clone(),
@@ -170,6 +170,33 @@ fn markups_drive_a_repair() {
         ));
     }
     assert!(seen.iter().all(|x| *x == seen[0]), "{seen:?}");
+    let out = d.join("all.stl");
+    let (r, _) = repair(d, &[s(&damaged), "--stenoses", "-o", s(&out), "-q"]);
+    let g = &r["regions"][0];
+    println!(
+        "--stenoses: centre {} radius {} stenosis {}%",
+        g["center"], g["radius"], g["diameter_stenosis_pct"]
+    );
+    assert_eq!(r["regions"].as_array().unwrap().len(), 1);
+    let found = (
+        g["center"].clone(),
+        g["radius"].clone(),
+        r["output"]["volume"].clone(),
+    );
+    assert_eq!(found, seen[0]);
+    // A point picked on the healthy wall beyond it: a ball of 1.5 healthy radii there.
+    let healthy = d.join("healthy.json");
+    std::fs::write(&healthy, "{\"points\": [[0.0, 3.0, -12.0]]}").unwrap();
+    let (r, _) = repair(
+        d,
+        &[s(&damaged), "--regions", s(&healthy), "-o", s(&out), "-q"],
+    );
+    let g = &r["regions"][0];
+    println!(
+        "healthy wall: centre {} radius {}",
+        g["center"], g["radius"]
+    );
+    assert!(g["source"].as_str().unwrap().contains("healthy.json"));
     // A bad markups file: exit 2, one line naming it, nothing written.
     let bad = d.join("bad.fcsv");
     std::fs::write(&bad, "# CoordinateSystem = XYZ\n1,2,3,4\n").unwrap();

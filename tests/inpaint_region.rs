@@ -11,7 +11,8 @@ use std::path::Path;
 use vesselmsr::bvh::MeshBvh;
 use vesselmsr::inpaint::holes::{classify_loops, hole_regions, LoopKind, LoopOptions};
 use vesselmsr::inpaint::region::{
-    local_vessel_radius, parse_ball, read_regions, validate_regions, Ball, PICKED_RADIUS_FACTOR,
+    local_vessel_radius, parse_ball, read_regions, validate_regions, Ball, PickedSite,
+    PICKED_RADIUS_FACTOR,
 };
 use vesselmsr::mesh::measures::mean_edge_length;
 use vesselmsr::mesh::primitives::{icosphere, open_tube};
@@ -123,7 +124,9 @@ fn read_regions_balls_and_points() {
         "r.json",
         r#"{"regions": [{"center": [0, 3, 10], "radius": 2}], "points": [[3.2, 0, 15], [0, -3, 20]]}"#,
     );
-    let balls = read_regions(&p, &mesh, &|_| None).unwrap();
+    let read = read_regions(&p, &mesh, &|_| None).unwrap();
+    assert!(read.iter().all(|r| !r.narrowing));
+    let balls: Vec<Ball> = read.iter().map(|r| r.ball).collect();
     assert_eq!(balls.len(), 3);
     assert_eq!(
         balls[0],
@@ -148,7 +151,40 @@ fn read_regions_balls_and_points() {
     // Balls only, as write_regions writes them.
     let out = dir.path().join("w.json");
     vesselmsr::inpaint::region::write_regions(&out, &balls).unwrap();
-    assert_eq!(read_regions(&out, &mesh, &|_| None).unwrap(), balls);
+    let again: Vec<Ball> = (read_regions(&out, &mesh, &|_| None).unwrap().iter())
+        .map(|r| r.ball)
+        .collect();
+    assert_eq!(again, balls);
+}
+
+#[test]
+fn a_point_picked_on_a_narrowing_reads_as_that_narrowing_s_region() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = tube3();
+    let p = write(
+        dir.path(),
+        "r.json",
+        r#"{"points": [[3.2, 0, 15], [0, -3, 20]]}"#,
+    );
+    // The caller knows of a narrowing around z = 20 (its region a ball of 5 on the axis) and
+    // of the healthy radius 3 elsewhere.
+    let lesion = Ball {
+        center: Point3::new(0.0, 0.0, 20.0),
+        radius: 5.0,
+    };
+    let site = |q: &Point3<f64>| {
+        Some(if lesion.contains(q) {
+            PickedSite::Narrowing(lesion)
+        } else {
+            PickedSite::Radius(3.0)
+        })
+    };
+    let read = read_regions(&p, &mesh, &site).unwrap();
+    assert_eq!(read.len(), 2);
+    assert!(!read[0].narrowing);
+    assert!((read[0].ball.radius - PICKED_RADIUS_FACTOR * 3.0).abs() < 1e-12);
+    assert_eq!(read[1].ball, lesion);
+    assert!(read[1].narrowing);
 }
 
 #[test]

@@ -257,7 +257,9 @@ fn a_narrowing_of_the_capped_aorta_is_widened_to_its_own_shape() {
     // is this one, within 2.5 R of it and 4σ along it, moved towards its projection c(s) on the branch polyline,
     // v ← c + (v − c)·(1 − 0.5·exp(−(s − s₀)²/(2σ²))). Repaired by `repair --stenoses 30`,
     // judged in D = the ball of 3σ: the fill keeps the narrowed wall's own cross-section shape
-    // at the healthy size (guided::widen_narrowed; 4.40h / −1.9% before, 2.18h / −1.0% after).
+    // at the healthy size (guided::widen_narrowed; 4.40h / −1.9% before, 2.18h / −1.0% after),
+    // along the narrowed lumen's own centreline (guided::follow_or_bridge; 0.83h / −2.5%: a
+    // cubic between the shoulders, used before, leaves that axis: 2.18h).
     let (truth, cl, b, k) = centreline_site("aorta_abdominal_capped.stl", [230.46, 118.04, 25.3]);
     let pts = &cl.branches[b].points;
     let r = cl.branches[b].radius[k];
@@ -307,7 +309,7 @@ fn a_narrowing_of_the_capped_aorta_is_widened_to_its_own_shape() {
         "narrowed capped aorta",
     );
     assert!(before > 5.0, "the narrowing is {before}h deep");
-    assert!(hd <= 3.0, "{hd}h");
+    assert!(hd <= 1.5, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
 }
 

@@ -116,14 +116,18 @@ impl HealthyVessel {
         self.lesions
             .iter()
             .filter(|l| l.nascet_stenosis_pct >= min_degree_pct)
-            .map(|l| {
-                let r = 0.5 * l.reference_diameter;
-                Ball {
-                    center: Point3::from(l.position),
-                    radius: (1.5 * r).max(l.length + r),
-                }
-            })
+            .map(lesion_ball)
             .collect()
+    }
+
+    /// The region of the lesion of at least `min_degree_pct` (NASCET) whose ball (as
+    /// [`Self::lesion_regions`] gives it) holds the surface point `p`, the nearest one's when
+    /// several do: a point picked on a narrowing.
+    pub fn lesion_region_at(&self, p: &Point3<f64>, min_degree_pct: f64) -> Option<Ball> {
+        self.lesion_regions(min_degree_pct)
+            .into_iter()
+            .filter(|b| b.contains(p))
+            .min_by(|a, b| (a.center - p).norm().total_cmp(&(b.center - p).norm()))
     }
 
     /// The stenosis inside `ball` along the centreline (see the module docs): over the measured
@@ -166,5 +170,15 @@ impl HealthyVessel {
             normal_diameter: dref.normal,
             nascet_stenosis_pct: (1.0 - dmin / dref.normal) * 100.0,
         })
+    }
+}
+
+/// The region of one lesion: on the centreline at its narrowest point, radius 1.5 healthy radii
+/// or its length plus one healthy radius, the larger ([`HealthyVessel::lesion_regions`]).
+fn lesion_ball(l: &Lesion) -> Ball {
+    let r = 0.5 * l.reference_diameter;
+    Ball {
+        center: Point3::from(l.position),
+        radius: (1.5 * r).max(l.length + r),
     }
 }

@@ -31,7 +31,8 @@ pub struct RepairArgs {
     /// [[x, y, z], ...]}, or a 3D Slicer markups file (.mrk.json or .fcsv: its control points
     /// are picked points, turned from RAS into the mesh's LPS when stored in RAS); each picked
     /// surface point becomes a ball of 1.5 healthy vessel radii (the centreline's healthy
-    /// reference there; else the local radius).
+    /// reference there; else the local radius), or, picked on a narrowing of 20% or more, that
+    /// narrowing's region (as --stenoses gives it).
     #[arg(long, value_name = "FILE")]
     pub regions: Option<PathBuf>,
     /// Every boundary loop of the input that is not an open vessel end (a near-planar loop across

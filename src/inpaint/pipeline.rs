@@ -15,7 +15,7 @@
 //!    error.
 
 use super::holes::{classify_loops, hole_regions, LoopKind, LoopOptions};
-use super::region::{read_regions, Ball};
+use super::region::{read_regions, Ball, PickedSite};
 use super::region_limits::check_regions;
 pub use super::region_limits::MAX_REGIONS;
 use super::repair::{repair_with_centerline, Repair, RepairOptions};
@@ -30,12 +30,16 @@ use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
 use crate::mesh::units::{check_vessel_scale, VesselScaleOptions};
 use crate::report::repair_report::{
-    region_reports, surface_measures, LoopReport, MeshPart, RepairParameters, RepairReport,
-    DETECTED_STENOSIS,
+    is_stenosis_source, region_reports, surface_measures, LoopReport, MeshPart, RepairParameters,
+    RepairReport, DETECTED_STENOSIS, PICKED_STENOSIS,
 };
 use crate::{Error, Result, TriMesh};
 use std::path::PathBuf;
 use std::time::Instant;
+
+/// A point picked on a narrowing of at least this stenosis (NASCET, %) chooses that narrowing's
+/// region (`--stenoses`'s default threshold).
+pub const PICKED_STENOSIS_MIN_PCT: f64 = 20.0;
 
 /// What to repair and how: the regions' sources and the options of `vesselmsr repair`.
 #[derive(Debug, Clone)]
@@ -188,10 +192,20 @@ pub fn repair_vessel(
     };
     let centerline_secs = centerline_start.elapsed().as_secs_f64();
     if let Some(path) = &request.regions_file {
-        let radius = |p: &nalgebra::Point3<f64>| healthy.as_ref().and_then(|h| h.healthy_radius(p));
-        for b in read_regions(path, mesh, &radius)? {
-            balls.push(b);
-            sources.push(format!("regions file {}", path.display()));
+        let site = |p: &nalgebra::Point3<f64>| {
+            let h = healthy.as_ref()?;
+            match h.lesion_region_at(p, PICKED_STENOSIS_MIN_PCT) {
+                Some(ball) => Some(PickedSite::Narrowing(ball)),
+                None => h.healthy_radius(p).map(PickedSite::Radius),
+            }
+        };
+        for r in read_regions(path, mesh, &site)? {
+            balls.push(r.ball);
+            sources.push(if r.narrowing {
+                PICKED_STENOSIS.to_string()
+            } else {
+                format!("regions file {}", path.display())
+            });
         }
     }
     if let Some(p) = request.stenoses {
@@ -254,7 +268,7 @@ pub fn repair_vessel(
     }
     // The narrowings' regions hold an intact lumen: the fill may follow their centreline.
     let opts = &RepairOptions {
-        intact_lumen: sources.iter().map(|s| s == DETECTED_STENOSIS).collect(),
+        intact_lumen: sources.iter().map(|s| is_stenosis_source(s)).collect(),
         ..request.options.clone()
     };
     repair_budget::check(mesh, &balls, opts, request.max_memory).map_err(|e| e.context(name))?;

@@ -7,11 +7,14 @@
 //!
 //! A picked point becomes a ball centred on the surface point nearest to it, of radius
 //! [`PICKED_RADIUS_FACTOR`] × the healthy vessel radius there when the caller knows it (the
-//! repair gives the centreline's healthy reference, `centerline::healthy`, so a point picked in
-//! a narrowing is sized by the healthy vessel, not by the narrowed lumen), else the local vessel
-//! radius ([`local_vessel_radius`]: half the median length of a fan of inward chords, the
-//! ray-cast estimate of the vessel's inscribed radius). Balls also come from the command line (`--region x,y,z,r`, [`parse_ball`]) and are
-//! checked against the mesh before use ([`validate_regions`]).
+//! repair gives the centreline's healthy reference, `centerline::healthy`), else the local
+//! vessel radius ([`local_vessel_radius`]: half the median length of a fan of inward chords, the
+//! ray-cast estimate of the vessel's inscribed radius). A point picked on a narrowing that the
+//! caller's centreline finds (the repair: one of 20% or more, within the region `--stenoses`
+//! would give it) becomes that narrowing's region: a clinician points at the lesion, and the
+//! whole lesion, not a ball of the wall around the click, is widened. Balls also come from the
+//! command line (`--region x,y,z,r`, [`parse_ball`]) and are checked against the mesh before
+//! use ([`validate_regions`]).
 
 use crate::bvh::MeshBvh;
 use crate::io::write_atomic;
@@ -113,6 +116,23 @@ pub fn write_regions(path: &Path, balls: &[Ball]) -> Result<()> {
 
 /// A ball picked by a point has this many times the local vessel radius (world units follow).
 pub const PICKED_RADIUS_FACTOR: f64 = 1.5;
+
+/// What the caller knows of the vessel at a picked surface point ([`read_regions`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PickedSite {
+    /// The healthy vessel radius there, world units: the ball is [`PICKED_RADIUS_FACTOR`] × it.
+    Radius(f64),
+    /// The point lies on a narrowing: its region (the one `repair --stenoses` gives it).
+    Narrowing(Ball),
+}
+
+/// A region read from a regions file: its ball, and whether it is a narrowing's region that a
+/// picked point chose (an intact, narrowed lumen: the repair widens it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReadRegion {
+    pub ball: Ball,
+    pub narrowing: bool,
+}
 
 /// Parses a command-line ball `x,y,z,r` (world units): four finite numbers, r > 0.
 pub fn parse_ball(text: &str) -> Result<Ball> {
@@ -225,13 +245,15 @@ pub fn median(mut v: Vec<f64>) -> f64 {
 /// Reads a regions file (see the module docs; or a 3D Slicer markups file, `.mrk.json` or
 /// `.fcsv`, whose points are picked points: [`crate::io::read_markups`]) for `mesh`: its balls first, then one ball per
 /// picked point, centred on the surface point nearest to it with radius [`PICKED_RADIUS_FACTOR`]
-/// × `healthy(point)`, or × [`local_vessel_radius`] there where that gives None. Unknown keys, malformed JSON, a point where no vessel radius
-/// can be estimated and a file listing no region at all are errors naming the file.
+/// × the radius `site(point)` gives, or × [`local_vessel_radius`] there where it gives None; a
+/// point that `site` finds on a narrowing becomes that narrowing's region instead. Unknown
+/// keys, malformed JSON, a point where no vessel radius can be estimated and a file listing no
+/// region at all are errors naming the file.
 pub fn read_regions(
     path: &Path,
     mesh: &TriMesh,
-    healthy: &dyn Fn(&Point3<f64>) -> Option<f64>,
-) -> Result<Vec<Ball>> {
+    site: &dyn Fn(&Point3<f64>) -> Option<PickedSite>,
+) -> Result<Vec<ReadRegion>> {
     // A 3D Slicer markups file (.mrk.json, .fcsv) lists picked points only.
     let file = if crate::io::is_markups_path(path) {
         let points = crate::io::read_markups(path)?;
@@ -250,7 +272,12 @@ pub fn read_regions(
             "no regions (neither \"regions\" nor \"points\" lists anything)",
         ));
     }
-    let mut balls: Vec<Ball> = file.regions.iter().map(Ball::from).collect();
+    let mut balls: Vec<ReadRegion> = (file.regions.iter())
+        .map(|r| ReadRegion {
+            ball: Ball::from(r),
+            narrowing: false,
+        })
+        .collect();
     if !file.points.is_empty() {
         let bvh = MeshBvh::new(mesh);
         if bvh.is_empty() {
@@ -262,7 +289,19 @@ pub fn read_regions(
         for (k, q) in file.points.iter().enumerate() {
             let q = Point3::from(*q);
             let snapped = bvh.closest_point(&q).point;
-            let r = healthy(&snapped)
+            let known = site(&snapped);
+            if let Some(PickedSite::Narrowing(ball)) = known {
+                balls.push(ReadRegion {
+                    ball,
+                    narrowing: true,
+                });
+                continue;
+            }
+            let healthy = known.and_then(|s| match s {
+                PickedSite::Radius(r) => Some(r),
+                PickedSite::Narrowing(_) => None,
+            });
+            let r = healthy
                 .or_else(|| local_vessel_radius(mesh, &bvh, &snapped))
                 .ok_or_else(|| {
                     Error::format(
@@ -276,9 +315,12 @@ pub fn read_regions(
                         ),
                     )
                 })?;
-            balls.push(Ball {
-                center: snapped,
-                radius: PICKED_RADIUS_FACTOR * r,
+            balls.push(ReadRegion {
+                ball: Ball {
+                    center: snapped,
+                    radius: PICKED_RADIUS_FACTOR * r,
+                },
+                narrowing: false,
             });
         }
     }

@@ -148,6 +148,14 @@ pub fn surface_measures(info: &MeshInfo) -> SurfaceMeasures {
 
 /// The source of a region that `repair --stenoses` placed on a narrowing the centreline found.
 pub const DETECTED_STENOSIS: &str = "detected stenosis";
+/// The source of a narrowing's region chosen by a point picked on it (a regions file).
+pub const PICKED_STENOSIS: &str = "picked stenosis";
+
+/// Whether a region of this source is a narrowing's (an intact, narrowed lumen, measured at
+/// its own narrowest point).
+pub fn is_stenosis_source(source: &str) -> bool {
+    source == DETECTED_STENOSIS || source == PICKED_STENOSIS
+}
 
 /// The per-region figures for `balls` (with their `sources`), `input` being the measured input
 /// (capped) and `output` the repaired mesh; the stenosis along `healthy` (the input's centreline)
@@ -177,11 +185,12 @@ pub fn region_reports(
         .map(|(k, ball)| {
             let vin = volume_in_ball_with(input, win_in, ball);
             let vout = volume_in_ball_with(output, win_out, ball);
-            // A narrowing found by `--stenoses` is measured at its own narrowest point, the
-            // ball's centre (within a third of the ball's radius, half a healthy radius at
-            // least), not at the deepest narrowing the ball reaches: its ball (a healthy radius
-            // beyond the lesion's width) can hold a neighbouring lesion's throat.
-            let detected = sources.get(k).is_some_and(|s| s == DETECTED_STENOSIS);
+            // A narrowing's region (found by `--stenoses` or picked) is measured at its own
+            // narrowest point, the ball's centre (within a third of the ball's radius, half a
+            // healthy radius at least), not at the deepest narrowing the ball reaches: its ball
+            // (a healthy radius beyond the lesion's width) can hold a neighbouring lesion's
+            // throat.
+            let detected = sources.get(k).is_some_and(|s| is_stenosis_source(s));
             let probe = Ball {
                 radius: if detected {
                     ball.radius / 3.0
