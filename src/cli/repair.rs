@@ -46,7 +46,8 @@ pub struct RepairArgs {
     #[arg(long, value_name = "P", num_args = 0..=1, default_missing_value = "20")]
     pub stenoses: Option<f64>,
     /// Voxel size h of the grid around D, world units (default: the voxelize rule on the whole
-    /// mesh, min(mean edge / 2, longest side / 256)).
+    /// mesh, min(mean edge / 2, longest side / 256); for flow, msr and paper at least an eighth
+    /// of the typical vessel radius 2·volume/area).
     #[arg(long, value_name = "H")]
     pub voxel: Option<f64>,
     /// How D is filled: centerline (the vessel continued across D along its centreline, with

@@ -2,7 +2,8 @@
 //! grid around D only, and the result is meshed and stitched into the original triangles.
 //!
 //! 1. Close the input's open vessel ends (unless kept open), size the voxel h (the project's
-//!    default rule on the whole mesh, or given), and take a sub-box around D with a margin:
+//!    default rule on the whole mesh, for the curvature motions no finer than an eighth of the
+//!    vessel's radius, or given), and take a sub-box around D with a margin:
 //!    the cost follows the size of D, not of the vessel tree.
 //! 2. φ_0: signed distance of the (closed) input on the sub-box (winding-number sign, so holes
 //!    are tolerated), redistanced so that the fills compare true distances: over the whole
@@ -44,6 +45,7 @@ use crate::mesh::cap::{cap_holes, CapOptions};
 use crate::mesh::measures::{bounding_box, mean_edge_length};
 use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
+use crate::mesh::units::typical_vessel_radius;
 use crate::motion::{Flow, FlowOptions, Velocity};
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
@@ -122,7 +124,8 @@ impl FromStr for InpaintMethod {
 pub struct RepairOptions {
     /// The fill (default [`InpaintMethod::Centerline`]).
     pub method: InpaintMethod,
-    /// Voxel h, world units; `None`: the default rule on the whole input mesh.
+    /// Voxel h, world units; `None`: the default rule on the whole input mesh (for the
+    /// curvature motions at least [`MOTION_VOXELS_PER_RADIUS`]⁻¹ of the typical vessel radius).
     pub voxel: Option<f64>,
     /// Keep the input's triangles outside D and stitch the patch to them (default true).
     pub keep_outside: bool,
@@ -215,6 +218,11 @@ pub struct Repair {
     /// whole, ends kept open).
     pub windings: Option<(WindingNumber, WindingNumber)>,
 }
+
+/// The default voxel of the curvature-motion methods (flow, msr, paper): the typical vessel
+/// radius (2·volume/area) over this. At the rule's voxel, R/25 on the phantoms (R = 3), they
+/// took 10–120 s a phantom, paper 1,100 s on the stenosis one (12 rounds, not converged).
+pub const MOTION_VOXELS_PER_RADIUS: f64 = 8.0;
 
 /// Sub-box margin around D beyond the balls, in voxels (the fills that grow the shape add half
 /// the largest radius and their growth c·T).
@@ -310,7 +318,21 @@ pub fn repair_with_centerline(
                 "--voxel must be a positive length in the mesh's units, got {v}"
             )))
         }
-        None => default_voxel(mean_edge_length(&closed_input), (hi - lo).max()),
+        None => {
+            let rule = default_voxel(mean_edge_length(&closed_input), (hi - lo).max());
+            // The curvature motions (flow, msr, paper) take a number of steps that grows as
+            // h⁻² on a grid that grows as h⁻³: they work at MOTION_VOXELS_PER_RADIUS voxels
+            // across the vessel's radius, the resolution their figures are measured at
+            // (benches/inpaint), unless the rule is coarser.
+            let motion = matches!(
+                opts.method,
+                InpaintMethod::Flow | InpaintMethod::Msr | InpaintMethod::Paper
+            );
+            match typical_vessel_radius(&closed_input) {
+                Some(r) if motion => rule.max(r / MOTION_VOXELS_PER_RADIUS),
+                _ => rule,
+            }
+        }
     };
     // The lattice of the whole vessel (so the fallback re-mesh shares the sub-box's nodes).
     let rmax = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
