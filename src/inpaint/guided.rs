@@ -780,7 +780,7 @@ fn hermite(a: &Anchor, b: &Anchor, spacing: f64) -> Vec<Point3<f64>> {
 /// measured rather than guessed, and the widened sections are centred on the narrowed wall
 /// ([`Sections::widen_narrowed`]) whatever the curve: a cubic that leaves the lumen's axis
 /// tilts them and misplaces the sections beside them (the synthetic narrowings of the real
-/// vessels bench: the capped aorta's 2.18h → 0.81h, the open aorta's 2.41h → 1.87h, the
+/// vessels bench: the capped aorta's 2.18h → 0.83h, the open aorta's 2.41h → 1.88h, the
 /// others unchanged; a cubic was kept before unless the centreline strayed from it by half a
 /// radius).
 fn follow_or_bridge(

@@ -289,18 +289,17 @@ pub fn read_regions(
         for (k, q) in file.points.iter().enumerate() {
             let q = Point3::from(*q);
             let snapped = bvh.closest_point(&q).point;
-            let known = site(&snapped);
-            if let Some(PickedSite::Narrowing(ball)) = known {
-                balls.push(ReadRegion {
-                    ball,
-                    narrowing: true,
-                });
-                continue;
-            }
-            let healthy = known.and_then(|s| match s {
-                PickedSite::Radius(r) => Some(r),
-                PickedSite::Narrowing(_) => None,
-            });
+            let healthy = match site(&snapped) {
+                Some(PickedSite::Narrowing(ball)) => {
+                    balls.push(ReadRegion {
+                        ball,
+                        narrowing: true,
+                    });
+                    continue;
+                }
+                Some(PickedSite::Radius(r)) => Some(r),
+                None => None,
+            };
             let r = healthy
                 .or_else(|| local_vessel_radius(mesh, &bvh, &snapped))
                 .ok_or_else(|| {
