@@ -328,9 +328,12 @@ pub fn repair_with_centerline(
                 opts.method,
                 InpaintMethod::Flow | InpaintMethod::Msr | InpaintMethod::Paper
             );
-            match typical_vessel_radius(&closed_input) {
-                Some(r) if motion => rule.max(r / MOTION_VOXELS_PER_RADIUS),
-                _ => rule,
+            match motion
+                .then(|| typical_vessel_radius(&closed_input))
+                .flatten()
+            {
+                Some(r) => rule.max(r / MOTION_VOXELS_PER_RADIUS),
+                None => rule,
             }
         }
     };
