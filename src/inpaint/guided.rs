@@ -634,10 +634,8 @@ fn plan_group(
             // unless the sphere rests on a hole's cap (the damage is at the junction: the
             // sphere is then smaller than the vessel's).
             let on_cap = |q: &crate::centerline::Junction| {
-                sections.cap.as_ref().is_some_and(|faces| {
-                    let near = sections.bvh.closest_point(&q.position);
-                    faces.contains(&(near.face as usize))
-                })
+                sections.cap.is_some()
+                    && sections.is_cap(sections.bvh.closest_point(&q.position).face)
             };
             let cap = found
                 .filter(|q| !on_cap(q))
