@@ -213,7 +213,8 @@ use vesselmsr::mesh::measures::{bounding_box, mean_edge_length};
 use vesselmsr::mesh::topology::{boundary_loops, connected_components};
 use vesselmsr::TriMesh;
 
-/// Seed of every draw (one splitmix64 stream per kind of damage and vessel).
+/// Seed of every draw (one splitmix64 stream per kind of damage and vessel); `--seed N` draws
+/// other cases (held-out cases: the figures must not be those of one draw alone).
 const SEED: u64 = 21;
 /// Wall chops per vessel.
 const CHOPS: usize = 3;
@@ -686,9 +687,9 @@ fn occlusion_case(v: &Vessel, site: &Site) -> Case {
 }
 
 /// The five cases of a vessel (fewer when no place fits), printing where each lies.
-fn cases(v: &Vessel, index: u64) -> Vec<Case> {
+fn cases(v: &Vessel, index: u64, seed: u64) -> Vec<Case> {
     let mut out = Vec::new();
-    let mut rng = SplitMix(SEED ^ (index << 32));
+    let mut rng = SplitMix(seed ^ (index << 32));
     let chops = chop_points(v, &mut rng);
     if chops.len() < CHOPS {
         println!("  only {} wall point(s) away from the ends", chops.len());
@@ -700,7 +701,7 @@ fn cases(v: &Vessel, index: u64) -> Vec<Case> {
         println!("  no centreline: no stenosis or occlusion case");
         return out;
     };
-    let mut rng = SplitMix(SEED ^ (index << 32) ^ 1);
+    let mut rng = SplitMix(seed ^ (index << 32) ^ 1);
     match pick(cl, STENOSIS_SIGMAS * SIGMA, &mut rng) {
         Some((site, clearance)) => {
             let mut case = stenosis_case(v, cl, &site);
@@ -711,7 +712,7 @@ fn cases(v: &Vessel, index: u64) -> Vec<Case> {
             println!("  no healthy stretch of 2×3σ away from junctions and ends: no stenosis case")
         }
     }
-    let mut rng = SplitMix(SEED ^ (index << 32) ^ 2);
+    let mut rng = SplitMix(seed ^ (index << 32) ^ 2);
     match pick(cl, OCCLUSION_WINDOW, &mut rng) {
         Some((site, clearance)) => {
             let mut case = occlusion_case(v, &site);
@@ -1344,18 +1345,31 @@ fn main() {
         rayon::current_num_threads(),
         load()
     );
-    println!("reproduce: cargo bench --bench repair_real");
     let mut args = std::env::args().skip(1);
     let mut only = Vec::new();
     let mut keep: Option<PathBuf> = None;
+    let mut seed = SEED;
     while let Some(a) = args.next() {
-        if a == "--keep" {
+        if a == "--seed" {
+            match args.next().and_then(|s| s.parse().ok()) {
+                Some(s) => seed = s,
+                None => {
+                    eprintln!("repair_real: --seed needs a whole number");
+                    std::process::exit(2);
+                }
+            }
+        } else if a == "--keep" {
             keep = args.next().map(PathBuf::from);
         } else if let Some(dir) = a.strip_prefix("--keep=") {
             keep = Some(PathBuf::from(dir));
         } else if !a.starts_with("--") {
             only.push(a);
         }
+    }
+    if seed == SEED {
+        println!("reproduce: cargo bench --bench repair_real");
+    } else {
+        println!("reproduce: cargo bench --bench repair_real -- --seed {seed} (held-out cases)");
     }
     let data = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/real"));
     if !data.is_dir() {
@@ -1391,7 +1405,7 @@ fn main() {
             cl.map_or(0, |c| c.junctions.len()),
         );
         let mut results = Vec::new();
-        for case in cases(&vessel, index as u64) {
+        for case in cases(&vessel, index as u64, seed) {
             let c = case.region.center;
             println!(
                 "  {}: R = {}, D = ball ({}, {}, {}) radius {}; {}",

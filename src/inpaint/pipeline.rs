@@ -30,8 +30,8 @@ use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
 use crate::mesh::units::{check_vessel_scale, VesselScaleOptions};
 use crate::report::repair_report::{
-    is_stenosis_source, region_reports, surface_measures, LoopReport, MeshPart, RepairParameters,
-    RepairReport, DETECTED_STENOSIS, PICKED_STENOSIS,
+    is_stenosis_source, region_reports, surface_measures, unrestored_narrowing, LoopReport,
+    MeshPart, RepairParameters, RepairReport, DETECTED_STENOSIS, PICKED_STENOSIS,
 };
 use crate::{Error, Result, TriMesh};
 use std::path::PathBuf;
@@ -306,6 +306,12 @@ pub fn repair_vessel(
         healthy.as_ref(),
         result.windings.as_ref().map(|(i, o)| [i, o]),
     );
+    // A narrowing left narrowed is no silent failure.
+    for (k, region) in regions.iter().enumerate() {
+        if let Some(n) = unrestored_narrowing(k + 1, region) {
+            result.notices.push(n);
+        }
+    }
     let info = mesh_info(&result.mesh);
     let input_info = mesh_info(&result.closed_input);
     let measure_secs = measure_start.elapsed().as_secs_f64();
