@@ -82,6 +82,19 @@ pub struct Reference {
     pub local: f64,
     /// The narrower shoulder.
     pub normal: f64,
+    /// The shoulders on the side of the branch's start and of its end (None: not known).
+    pub shoulders: [Option<Shoulder>; 2],
+}
+
+/// A shoulder: the healthy lumen beside a point (see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Shoulder {
+    /// Its index among the branch's profile points.
+    pub point: usize,
+    /// Its arc length from the branch's first point, world units.
+    pub s: f64,
+    /// Its (median-filtered) equivalent diameter, world units.
+    pub diameter: f64,
 }
 
 /// The narrowing figures of one branch.
@@ -143,9 +156,19 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
     (lk.then_some(left), rk.then_some(right))
 }
 
-/// The references at point `k` of (s, d) from its shoulders.
-fn reference_at(s: &[f64], d: &[f64], k: usize, reach: f64) -> Reference {
-    match shoulders(s, d, k, reach) {
+/// The references at point `k` of (s, d) from its shoulders (`idx`: the profile point of each
+/// of (s, d)'s).
+fn reference_at(s: &[f64], d: &[f64], idx: &[usize], k: usize, reach: f64) -> Reference {
+    let found = shoulders(s, d, k, reach);
+    let shoulder = |j: Option<usize>| {
+        j.map(|j| Shoulder {
+            point: idx[j],
+            s: s[j],
+            diameter: d[j],
+        })
+    };
+    let shoulders = [shoulder(found.0), shoulder(found.1)];
+    match found {
         (Some(l), Some(r)) => {
             let local = if s[r] > s[l] {
                 d[l] + (d[r] - d[l]) * (s[k] - s[l]) / (s[r] - s[l])
@@ -155,16 +178,19 @@ fn reference_at(s: &[f64], d: &[f64], k: usize, reach: f64) -> Reference {
             Reference {
                 local,
                 normal: d[l].min(d[r]),
+                shoulders,
             }
         }
         (Some(j), None) | (None, Some(j)) => Reference {
             local: d[j],
             normal: d[j],
+            shoulders,
         },
         // Not returned by `shoulders`; the point is then its own reference.
         (None, None) => Reference {
             local: d[k],
             normal: d[k],
+            shoulders,
         },
     }
 }
@@ -232,7 +258,7 @@ pub fn find_stenoses(
         fig.measured = idx.len();
         let reach = SHOULDER_REACH * median(d.clone());
         let refs: Vec<Reference> = (0..d.len())
-            .map(|k| reference_at(&s, &d, k, reach))
+            .map(|k| reference_at(&s, &d, &idx, k, reach))
             .collect();
         for (k, r) in refs.iter().enumerate() {
             fig.reference[idx[k]] = Some(*r);
@@ -323,7 +349,8 @@ mod tests {
     #[test]
     fn shoulders_give_the_local_and_normal_references() {
         let (s, d) = profile(false);
-        let r = reference_at(&s, &d, 60, 24.0);
+        let idx: Vec<usize> = (0..s.len()).collect();
+        let r = reference_at(&s, &d, &idx, 60, 24.0);
         let healthy = 6.0 - 0.02 * 30.0;
         assert!(
             (r.local - healthy).abs() < 0.02 * healthy,
@@ -331,8 +358,21 @@ mod tests {
         );
         assert!(r.normal < r.local && r.normal > 0.93 * healthy, "{r:?}");
         assert!((d[60] / r.local - 0.5).abs() < 0.02);
+        // The shoulders bracket the throat (σ = 3: beyond 2σ on either side), and the local
+        // reference is the line between them.
+        let [Some(left), Some(right)] = r.shoulders else {
+            panic!("both shoulders: {r:?}");
+        };
+        assert!(left.s < 24.0 && right.s > 36.0, "{r:?}");
+        assert_eq!(
+            (d[left.point], d[right.point]),
+            (left.diameter, right.diameter)
+        );
+        let line =
+            left.diameter + (right.diameter - left.diameter) * (30.0 - left.s) / (right.s - left.s);
+        assert!((line - r.local).abs() < 1e-12, "{line} {r:?}");
         // A healthy point is its own reference on a taper.
-        let r = reference_at(&s, &d, 190, 24.0);
+        let r = reference_at(&s, &d, &idx, 190, 24.0);
         assert!((1.0 - d[190] / r.normal).abs() < 0.01, "{r:?} {}", d[190]);
     }
 
@@ -353,7 +393,8 @@ mod tests {
             })
             .collect();
         let k = 56;
-        let r = reference_at(&s, &d, k, 24.0);
+        let idx: Vec<usize> = (0..s.len()).collect();
+        let r = reference_at(&s, &d, &idx, k, 24.0);
         assert!((1.0 - d[k] / r.normal) < 0.06, "{r:?} {}", d[k]);
         assert!((1.0 - d[k] / r.local) > 0.15, "{r:?} {}", d[k]);
     }
@@ -368,7 +409,8 @@ mod tests {
         let (l, r) = shoulders(&s, &d, k, 24.0);
         assert_eq!(l, None);
         assert!(r.is_some());
-        let rf = reference_at(&s, &d, k, 24.0);
+        let idx: Vec<usize> = (0..s.len()).collect();
+        let rf = reference_at(&s, &d, &idx, k, 24.0);
         assert!((d[k] / rf.local - 0.5).abs() < 0.05, "{rf:?}");
     }
 }

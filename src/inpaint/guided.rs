@@ -53,8 +53,11 @@
 //!    readings on the tube's wall chart (arc length × arc of the section; `wall_chart`), so the
 //!    missing part of a section takes its shape, slope and bulge from the wall beside it,
 //!    around the vessel as well as along it. Through a narrowing (an intact lumen,
-//!    `--stenoses`), a section whose rays all meet the narrowed wall takes that wall's own
-//!    shape, scaled about its centroid to the interpolated size.
+//!    `--stenoses` or a point picked on it), a section whose rays all meet the narrowed wall
+//!    takes that wall's own shape, scaled about its centroid to the interpolated size. (A
+//!    narrowing's region is planned by [`super::widen`] instead, the lesion widened to the
+//!    healthy reference between its shoulders, whenever the input's centreline finds it narrower
+//!    than that reference; the anchors of this module are then its fallback.)
 //! 4. **Field.** At a node x of D, each tube gives |x − c|⊥ − ρ(θ) from its nearest curve sample
 //!    c (the offset projected on the section plane there; past an open anchor end the tube
 //!    continues straight, past a capped end it closes as a ball), and the fill is the smallest
@@ -68,7 +71,9 @@ use super::adaptive::{sample_adaptive, AdaptiveOptions};
 use super::junction::{junction_point, smooth_min, Branch as AxisBranch};
 use super::region::Ball;
 use super::wall_chart::fill_biharmonic;
+use super::widen::plan_widening;
 use crate::bvh::{MeshBvh, RayHit};
+use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::{Centerline, EndKind};
 use crate::grid::Grid3;
 use nalgebra::{Point3, Vector3};
@@ -137,8 +142,11 @@ pub struct GuideTube {
     pub start_profile: Vec<f64>,
     /// Section radii at the last sample, same angles, in the carried frame there.
     pub end_profile: Vec<f64>,
-    /// How the last sample ends the tube (the first is always an anchor: open).
+    /// How the last sample ends the tube.
     pub end_cap: EndCap,
+    /// The first sample ends the tube flat (a widened narrowing's); otherwise it is an anchor
+    /// and the tube goes on straight beyond it.
+    pub flat_start: bool,
     /// Radius of the ball that closes a round end, world units.
     pub cap_radius: f64,
     /// The wall's offset from the interpolated section at each sample and ray angle (sample-major,
@@ -257,6 +265,7 @@ pub fn plan_guides(
     centerline: &Centerline,
     balls: &[Ball],
     intact: &[bool],
+    healthy: Option<&HealthyVessel>,
     holes: &HoleCaps,
     h: f64,
     opts: &GuideOptions,
@@ -267,6 +276,22 @@ pub fn plan_guides(
         let follow = group
             .iter()
             .all(|&i| intact.get(i).copied().unwrap_or(false));
+        // A narrowing: the lesion widened to the healthy lumen (`widen`), when the centreline
+        // finds it narrower than that.
+        let widened = healthy.filter(|_| follow).and_then(|hv| {
+            let spacing = h / opts.samples_per_voxel.max(0.5);
+            let grow = opts.clearance_voxels * h;
+            plan_widening(mesh_bvh, hv, &gb, grow, opts.rays.max(8), spacing)
+        });
+        if let Some(tubes) = widened {
+            out.push(RegionGuide {
+                balls: group,
+                kinds: vec![GuideKind::Through; tubes.len()],
+                tubes,
+                fillet: 0.0,
+            });
+            continue;
+        }
         let cap = (!follow
             && group
                 .iter()
@@ -801,8 +826,14 @@ fn follow_or_bridge(
     if a.index > b.index {
         path.reverse();
     }
-    let r = a.radius.min(b.radius).max(spacing);
-    let dense = resample(&path, 0.25 * r);
+    smooth_path(&path, a.radius.min(b.radius), spacing)
+}
+
+/// A centreline stretch smoothed over about ±`radius` of arc (a moving average at a quarter
+/// radius apart: the skeleton's voxel steps taken out) and resampled `spacing` apart.
+pub(super) fn smooth_path(path: &[Point3<f64>], radius: f64, spacing: f64) -> Vec<Point3<f64>> {
+    let r = radius.max(spacing);
+    let dense = resample(path, 0.25 * r);
     let half = 4usize; // ±one radius of arc at a quarter-radius spacing
     let n = dense.len();
     let smooth: Vec<Point3<f64>> = (0..n)
@@ -818,7 +849,7 @@ fn follow_or_bridge(
 }
 
 /// The polyline resampled about `spacing` apart by arc length (ends kept).
-fn resample(pts: &[Point3<f64>], spacing: f64) -> Vec<Point3<f64>> {
+pub(super) fn resample(pts: &[Point3<f64>], spacing: f64) -> Vec<Point3<f64>> {
     let len: f64 = pts.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
     if pts.len() < 2 || len <= 0.0 {
         return pts.to_vec();
@@ -858,7 +889,7 @@ fn any_perpendicular(t: &Vector3<f64>) -> Vector3<f64> {
 
 /// Tangents (central differences) and rotation-minimising frames along `pts`, the first frame
 /// built on `t0`.
-fn frames(pts: &[Point3<f64>], t0: &Vector3<f64>) -> Vec<[Vector3<f64>; 3]> {
+pub(super) fn frames(pts: &[Point3<f64>], t0: &Vector3<f64>) -> Vec<[Vector3<f64>; 3]> {
     let n = pts.len();
     let tangent = |i: usize| {
         let (a, b) = (pts[i.saturating_sub(1)], pts[(i + 1).min(n - 1)]);
@@ -897,6 +928,36 @@ fn frames(pts: &[Point3<f64>], t0: &Vector3<f64>) -> Vec<[Vector3<f64>; 3]> {
     out
 }
 
+/// Whether wall point `p` belongs to the branches `own` (any branch when empty): no other branch
+/// of `centerline` is nearer by more than a quarter of `radius`.
+pub(super) fn on_branch(
+    centerline: &Centerline,
+    p: &Point3<f64>,
+    own: &[usize],
+    radius: f64,
+) -> bool {
+    if own.is_empty() {
+        return true;
+    }
+    let dist = |b: &crate::centerline::Branch| {
+        b.points
+            .iter()
+            .map(|q| (p - q).norm_squared())
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    };
+    let mine = own
+        .iter()
+        .filter_map(|&b| centerline.branches.get(b))
+        .map(dist)
+        .fold(f64::INFINITY, f64::min);
+    centerline
+        .branches
+        .iter()
+        .enumerate()
+        .all(|(i, b)| own.contains(&i) || mine <= dist(b) + 0.25 * radius)
+}
+
 /// Reads cross-sections of the input's wall around its centreline.
 struct Sections<'a> {
     bvh: &'a MeshBvh,
@@ -920,26 +981,7 @@ impl Sections<'_> {
     /// of `radius` (a ray that crossed a junction into a neighbouring vessel ends on that
     /// vessel's wall).
     fn on_branch(&self, p: &Point3<f64>, own: &[usize], radius: f64) -> bool {
-        if own.is_empty() {
-            return true;
-        }
-        let dist = |b: &crate::centerline::Branch| {
-            b.points
-                .iter()
-                .map(|q| (p - q).norm_squared())
-                .fold(f64::INFINITY, f64::min)
-                .sqrt()
-        };
-        let mine = own
-            .iter()
-            .filter_map(|&b| self.centerline.branches.get(b))
-            .map(dist)
-            .fold(f64::INFINITY, f64::min);
-        self.centerline
-            .branches
-            .iter()
-            .enumerate()
-            .all(|(i, b)| own.contains(&i) || mine <= dist(b) + 0.25 * radius)
+        on_branch(self.centerline, p, own, radius)
     }
 
     /// Whether `face` is one of the holes' cap triangles (false without caps).
@@ -1362,7 +1404,7 @@ fn fit_circle(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
 
 /// Distance from the origin along the unit direction `dir` to the closed polygon `poly` (the
 /// nearest crossing ahead), 2-D.
-fn ray_polygon(dir: (f64, f64), poly: &[(f64, f64)]) -> Option<f64> {
+pub(super) fn ray_polygon(dir: (f64, f64), poly: &[(f64, f64)]) -> Option<f64> {
     let n = poly.len();
     let mut best: Option<f64> = None;
     for a in 0..n {
@@ -1440,16 +1482,7 @@ fn make_tube(
     };
     let flat = end_cap == EndCap::Flat;
     let detail = sections.carry_details(&points, &frames, &acc, b.is_some(), flat, &own, base);
-    let chunks = points
-        .chunks(CHUNK)
-        .map(|run| {
-            let c = Point3::from(
-                run.iter().fold(Vector3::zeros(), |s, p| s + p.coords) / run.len() as f64,
-            );
-            let r = run.iter().map(|p| (p - c).norm()).fold(0.0, f64::max);
-            (c, r)
-        })
-        .collect();
+    let chunks = bounding_chunks(&points);
     let widest = start_profile
         .iter()
         .chain(&end_profile)
@@ -1463,10 +1496,55 @@ fn make_tube(
         start_profile,
         end_profile,
         end_cap,
+        flat_start: false,
         cap_radius,
         detail,
         chunks,
         widest,
+    }
+}
+
+/// The bounding spheres of runs of [`CHUNK`] consecutive samples.
+fn bounding_chunks(points: &[Point3<f64>]) -> Vec<(Point3<f64>, f64)> {
+    points
+        .chunks(CHUNK)
+        .map(|run| {
+            let c = Point3::from(
+                run.iter().fold(Vector3::zeros(), |s, p| s + p.coords) / run.len() as f64,
+            );
+            let r = run.iter().map(|p| (p - c).norm()).fold(0.0, f64::max);
+            (c, r)
+        })
+        .collect()
+}
+
+impl GuideTube {
+    /// A tube given by its section radii (`radii[i·m + j]` at sample i, angle 2πj/m in its frame),
+    /// cut flat at both ends.
+    pub(super) fn from_radii(
+        points: Vec<Point3<f64>>,
+        frames: Vec<[Vector3<f64>; 3]>,
+        radii: Vec<f64>,
+        m: usize,
+    ) -> GuideTube {
+        let mut acc = vec![0.0; points.len()];
+        for i in 1..points.len() {
+            acc[i] = acc[i - 1] + (points[i] - points[i - 1]).norm();
+        }
+        let total = acc.last().copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
+        GuideTube {
+            chunks: bounding_chunks(&points),
+            weight: acc.iter().map(|s| s / total).collect(),
+            widest: radii.iter().fold(0.0, |w: f64, &r| w.max(r)),
+            points,
+            frames,
+            start_profile: vec![0.0; m],
+            end_profile: vec![0.0; m],
+            end_cap: EndCap::Flat,
+            flat_start: true,
+            cap_radius: 0.0,
+            detail: radii,
+        }
     }
 }
 
@@ -1548,6 +1626,9 @@ impl GuideTube {
         let radial = perp.norm() - self.radius_at(i, theta);
         if last && along > 0.0 && self.end_cap == EndCap::Flat {
             return radial.max(along);
+        }
+        if i == 0 && along < 0.0 && self.flat_start {
+            return radial.max(-along);
         }
         radial
     }

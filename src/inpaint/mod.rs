@@ -24,3 +24,4 @@ pub mod repair_budget;
 pub mod stitch;
 pub mod topology;
 pub mod wall_chart;
+pub mod widen;

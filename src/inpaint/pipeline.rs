@@ -276,7 +276,7 @@ pub fn repair_vessel(
     let mut result = if nothing_to_do {
         unrepaired(mesh, opts)
     } else {
-        repair_with_centerline(mesh, &balls, opts, healthy.as_ref().map(|h| &h.centerline))
+        repair_with_centerline(mesh, &balls, opts, healthy.as_ref())
     }
     .map_err(|e| e.context(format!("{name}: repair failed")))?;
     let decimate = match request.decimate {

@@ -36,7 +36,9 @@ use super::region::{deepest_ball, Ball};
 use super::stitch::{cut_out, stitch_patch_checked, CutOut};
 use super::topology::remove_islands;
 use crate::bvh::{MeshBvh, WindingNumber};
-use crate::centerline::{compute_centerline, Centerline, CenterlineOptions};
+use crate::centerline::healthy::HealthyVessel;
+use crate::centerline::stenosis::StenosisFindOptions;
+use crate::centerline::{compute_centerline, CenterlineOptions};
 use crate::grid::{spec::default_voxel, Grid3, GridTransform, SubBox};
 use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::redistance::{redistance, RedistanceOptions, RedistanceScheme};
@@ -255,13 +257,14 @@ pub fn repair(mesh: &TriMesh, balls: &[Ball], opts: &RepairOptions) -> Result<Re
     repair_with_centerline(mesh, balls, opts, None)
 }
 
-/// [`repair`] with the input's centreline given (as traced by `compute_centerline` on `mesh`),
-/// for the `centerline` fill; `None` traces it when needed.
+/// [`repair`] with the input's centreline given (as traced by `compute_centerline` on `mesh`,
+/// with its diameter profiles and healthy references), for the `centerline` fill; `None`
+/// traces it when needed.
 pub fn repair_with_centerline(
     mesh: &TriMesh,
     balls: &[Ball],
     opts: &RepairOptions,
-    centerline: Option<&Centerline>,
+    healthy: Option<&HealthyVessel>,
 ) -> Result<Repair> {
     let mut timings = Vec::new();
     let mut clock = Instant::now();
@@ -439,11 +442,21 @@ pub fn repair_with_centerline(
         }
         InpaintMethod::Centerline => {
             let computed;
-            let centerline = match centerline {
-                Some(c) => Some(c),
+            let healthy = match healthy {
+                Some(h) => Some(h),
                 None => match compute_centerline(mesh, &CenterlineOptions::default()) {
                     Ok((c, _)) => {
-                        computed = c;
+                        // The diameter profiles only where a narrowing is to be widened.
+                        computed = if opts.intact_lumen.iter().any(|&i| i) {
+                            HealthyVessel::new(mesh, c, &StenosisFindOptions::default())
+                        } else {
+                            HealthyVessel {
+                                centerline: c,
+                                profiles: Vec::new(),
+                                narrowing: Vec::new(),
+                                lesions: Vec::new(),
+                            }
+                        };
                         Some(&computed)
                     }
                     Err(e) => {
@@ -454,6 +467,7 @@ pub fn repair_with_centerline(
                     }
                 },
             };
+            let centerline = healthy.map(|h| &h.centerline);
             let bvh = centreline_bvh.unwrap_or_else(|| MeshBvh::new(&closed_input));
             let rim = hole_rims(&closed_input, cap_faces.clone(), balls);
             let holes = HoleCaps {
@@ -466,6 +480,7 @@ pub fn repair_with_centerline(
                     c,
                     balls,
                     &opts.intact_lumen,
+                    healthy,
                     &holes,
                     h,
                     &GuideOptions::default(),
