@@ -2,8 +2,9 @@
 //!
 //! On each real vessel of ../shared/data/real but the cortex (skipped with a notice when the
 //! folder is absent), five seeded cases of damage, each judged against the intact mesh (the
-//! truth, as the file gives it: open ends, the capped aorta's inward winding and the carotid's
-//! metres included):
+//! truth, as the file gives it: the capped aorta's inward winding and the carotid's metres
+//! included; its open ends capped flat, as every watertight output closes them: an open end
+//! inside D has no surface to judge a cap against):
 //! - 3 wall chops: a wall point (splitmix64 on the seed: an area-weighted face, a uniform
 //!   barycentric point), more than 3 local radii R (`local_vessel_radius`) from the open ends'
 //!   vertices and from the centreline's endpoints (where capped ends lie), the points two sums
@@ -208,6 +209,7 @@ use vesselmsr::grid::spec::default_voxel;
 use vesselmsr::inpaint::phantom::SplitMix;
 use vesselmsr::inpaint::region::{local_vessel_radius, write_regions, Ball};
 use vesselmsr::io::{read_mesh, write_mesh};
+use vesselmsr::mesh::cap::{cap_holes, CapOptions};
 use vesselmsr::mesh::info::mesh_info;
 use vesselmsr::mesh::measures::{bounding_box, mean_edge_length};
 use vesselmsr::mesh::topology::{boundary_loops, connected_components};
@@ -359,6 +361,11 @@ struct CaseResult {
 struct Vessel {
     name: String,
     mesh: TriMesh,
+    /// The truth the outputs are judged against: the mesh with its open ends capped flat, as
+    /// every watertight output closes them (an open end inside D has no surface to compare a
+    /// cap with: the aneurysm's short ICA, whose narrowing's D holds its open end, 24.5h for a
+    /// flat cap before).
+    judged: TriMesh,
     bvh: MeshBvh,
     centerline: Option<Centerline>,
     /// Open-end loop vertices and centreline endpoints.
@@ -956,7 +963,7 @@ fn run_case(
     python: Option<&Path>,
     paper: bool,
 ) -> CaseResult {
-    let truth = &vessel.mesh;
+    let truth = &vessel.judged;
     let regions = region_args(dir, case);
     let ours_run = |tag: &str, method: Option<&str>| match &regions {
         Ok(args) => run_ours(dir, tag, args, method),
@@ -1329,8 +1336,24 @@ fn load_vessel(path: &Path) -> Option<Vessel> {
         ends.extend(cl.endpoints.iter().map(|e| e.position));
     }
     let bvh = MeshBvh::new(&mesh);
+    let judged = if boundary_loops(&mesh).is_empty() {
+        mesh.clone()
+    } else {
+        let opts = CapOptions {
+            orient_outward: false,
+            ..CapOptions::default()
+        };
+        match cap_holes(&mesh, &opts) {
+            Ok((closed, _)) => closed,
+            Err(e) => {
+                println!("  {name}: its open ends could not be capped ({e}): judged open");
+                mesh.clone()
+            }
+        }
+    };
     Some(Vessel {
         name,
+        judged,
         mesh,
         bvh,
         centerline,
