@@ -4,16 +4,21 @@
 //!
 //! Paper Section 4 inpaints D so that the shape follows the intact vessel around it; a
 //! narrowing's wall is all there, only too close to the axis, so the vessel around it is the
-//! healthy lumen on either side of the lesion: the local reference of `centerline::stenosis`
-//! (the straight line between the shoulders' equivalent diameters, the same reference the report's
-//! diameter stenosis is measured against). Per branch of the input's centreline and per run of its
-//! points inside the region (grown by the clearance), the stretch narrower than that reference
-//! (by 3% somewhere; extended while it stays narrower) is followed along the centreline, smoothed
-//! over about a radius; at each sample the input's wall is read along rays in the section plane
-//! (the narrowed lumen's own shape) and scaled about its centroid until its equivalent diameter
-//! 2√(A/π) is the reference there (sections already as wide are kept as they are). The tube is
-//! cut flat at both ends and united with the input by the caller (`repair`), so the region's
-//! other vessels, a junction in it, the shoulders themselves, are the input's.
+//! healthy lumen on either side of the lesion: the shoulders of `centerline::stenosis` and the
+//! straight line between their equivalent diameters (the local reference the report's diameter
+//! stenosis is measured against). Per branch of the input's centreline and per run of its points
+//! inside the region (grown by the clearance), deepest first, each point narrower than its local
+//! reference by 3% or more is a lesion, taken from its left shoulder to its right one (a side
+//! without a known shoulder: as far as the lumen stays narrower than the reference) and beyond
+//! them, inside the region, as far as the lumen is narrower than the shoulder or not measured (a
+//! shoulder read where the sections stop, beside a junction's flare, still lies on the lesion's
+//! flank). That stretch is followed along the centreline, smoothed over about a radius; at each
+//! sample the input's wall is read along rays in the section plane (the narrowed lumen's own
+//! shape; a ray that ends on another branch leaves the sample out) and scaled about its centroid
+//! until its equivalent diameter 2√(A/π) is the line's there (sections already as wide are kept
+//! as they are). The tube is cut flat at both ends and united with the input by the caller
+//! (`repair`), so the region's other vessels, a junction in it, the shoulders themselves, are the
+//! input's.
 //!
 //! Before this, a narrowing's region was bridged between anchors at its border like a hole
 //! (`guided`): where the region reached a junction or a branch's closed end, the anchors lay in
