@@ -256,7 +256,7 @@ fn a_narrowing_of_the_capped_aorta_is_widened_to_its_own_shape() {
     // --stenoses 30` and judged in D = the ball of 3σ: the fill keeps the narrowed wall's own
     // cross-section shape at the healthy size, along the narrowed lumen's own centreline
     // (4.40h / −1.9% with a circular section, 2.18h with a cubic between the shoulders, 0.83h /
-    // −2.5% bridged between anchors at ∂D, 0.81h / −2.4% widened to the healthy reference: `widen`).
+    // −2.5% bridged between anchors at ∂D, 0.81h / −2.5% widened to the healthy reference: `widen`).
     let (truth, damaged, d) = narrowed("aorta_abdominal_capped.stl", [230.46, 118.04, 25.3]);
     let (before, hd, ve) = repair_in(
         &damaged,
