@@ -849,7 +849,7 @@ pub(super) fn smooth_path(path: &[Point3<f64>], radius: f64, spacing: f64) -> Ve
 }
 
 /// The polyline resampled about `spacing` apart by arc length (ends kept).
-pub(super) fn resample(pts: &[Point3<f64>], spacing: f64) -> Vec<Point3<f64>> {
+fn resample(pts: &[Point3<f64>], spacing: f64) -> Vec<Point3<f64>> {
     let len: f64 = pts.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
     if pts.len() < 2 || len <= 0.0 {
         return pts.to_vec();
