@@ -178,6 +178,11 @@ fn markups_drive_a_repair() {
         g["center"], g["radius"], g["diameter_stenosis_pct"]
     );
     assert_eq!(r["regions"].as_array().unwrap().len(), 1);
+    // Widened to the healthy lumen (`widen`): nothing of the narrowing left at its throat
+    // (−0.1%), no notice.
+    let residual = g["residual_stenosis_pct"].as_f64().unwrap();
+    assert!(residual.abs() < 5.0, "{residual}% left");
+    assert!(!r["notices"].to_string().contains("not restored"));
     let found = (
         g["center"].clone(),
         g["radius"].clone(),
