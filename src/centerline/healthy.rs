@@ -53,6 +53,17 @@ pub struct RegionStenosis {
 }
 
 impl HealthyVessel {
+    /// `centerline` without its diameter profiles: no reference is known, nothing is found
+    /// narrowed (for a repair that widens no narrowing, which need not measure them).
+    pub fn unmeasured(centerline: Centerline) -> Self {
+        HealthyVessel {
+            centerline,
+            profiles: Vec::new(),
+            narrowing: Vec::new(),
+            lesions: Vec::new(),
+        }
+    }
+
     /// Profiles and reference lines of `centerline` on `mesh` (the input it was traced on).
     pub fn new(mesh: &TriMesh, centerline: Centerline, opts: &StenosisFindOptions) -> Self {
         let profiles = measure_profiles(mesh, &centerline);

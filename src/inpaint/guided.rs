@@ -958,6 +958,65 @@ pub(super) fn on_branch(
         .all(|(i, b)| own.contains(&i) || mine <= dist(b) + 0.25 * radius)
 }
 
+/// The `m` ray directions of a section, at angles 2πj/m in its frame (cos, sin).
+pub(super) fn ray_dirs(m: usize) -> Vec<(f64, f64)> {
+    (0..m)
+        .map(|j| {
+            let th = TAU * j as f64 / m as f64;
+            (th.cos(), th.sin())
+        })
+        .collect()
+}
+
+/// The input's wall around `c` in the section of frame `f`, along the rays `dirs`, in the
+/// section's coordinates: ray j meets the wall within `reach(j)` on the branches `own`
+/// ([`on_branch`] with `belong(j)`). None when a ray misses the wall or ends on another branch.
+pub(super) fn read_wall(
+    bvh: &MeshBvh,
+    centerline: &Centerline,
+    c: &Point3<f64>,
+    f: &[Vector3<f64>; 3],
+    dirs: &[(f64, f64)],
+    own: &[usize],
+    reach: impl Fn(usize) -> f64,
+    belong: impl Fn(usize) -> f64,
+) -> Option<Vec<(f64, f64)>> {
+    let mut wall = Vec::with_capacity(dirs.len());
+    for (j, &(cs, sn)) in dirs.iter().enumerate() {
+        let d = f[1] * cs + f[2] * sn;
+        let hit = bvh.cast_ray(c, &d, reach(j))?;
+        if !(hit.t > 0.0 && on_branch(centerline, &(c + d * hit.t), own, belong(j))) {
+            return None;
+        }
+        wall.push((hit.t * cs, hit.t * sn));
+    }
+    Some(wall)
+}
+
+/// `wall` scaled by `k` about `g` (section coordinates), read along the rays `dirs` from the
+/// section's origin; None where a ray misses it.
+pub(super) fn scaled_section(
+    wall: &[(f64, f64)],
+    g: (f64, f64),
+    k: f64,
+    dirs: &[(f64, f64)],
+) -> Option<Vec<f64>> {
+    let poly: Vec<(f64, f64)> = wall
+        .iter()
+        .map(|w| (g.0 + k * (w.0 - g.0), g.1 + k * (w.1 - g.1)))
+        .collect();
+    dirs.iter().map(|&dir| ray_polygon(dir, &poly)).collect()
+}
+
+/// Cumulative arc length along `points` from the first.
+fn arc_lengths(points: &[Point3<f64>]) -> Vec<f64> {
+    let mut acc = vec![0.0];
+    for w in points.windows(2) {
+        acc.push(acc.last().copied().unwrap_or(0.0) + (w[1] - w[0]).norm());
+    }
+    acc
+}
+
 /// Reads cross-sections of the input's wall around its centreline.
 struct Sections<'a> {
     bvh: &'a MeshBvh,
@@ -1202,23 +1261,18 @@ impl Sections<'_> {
                 if !inside_e(c) {
                     return None;
                 }
-                let dirs: Vec<(f64, f64)> = (0..m)
-                    .map(|j| {
-                        let th = TAU * j as f64 / m as f64;
-                        (th.cos(), th.sin())
-                    })
-                    .collect();
+                let dirs = ray_dirs(m);
                 let rho: Vec<f64> = (0..m).map(|j| base(i, j) + detail_ro[i * m + j]).collect();
-                let mut wall = Vec::with_capacity(m);
-                for (j, &(cs, sn)) in dirs.iter().enumerate() {
-                    let d = f[1] * cs + f[2] * sn;
-                    let hit = self.bvh.cast_ray(c, &d, 1.5 * rho[j])?;
-                    let p = c + d * hit.t;
-                    if !(hit.t > 0.0 && self.on_branch(&p, own, rho[j])) {
-                        return None;
-                    }
-                    wall.push((hit.t * cs, hit.t * sn));
-                }
+                let wall = read_wall(
+                    self.bvh,
+                    self.centerline,
+                    c,
+                    f,
+                    &dirs,
+                    own,
+                    |j| 1.5 * rho[j],
+                    |j| rho[j],
+                )?;
                 let g = wall.iter().fold((0.0, 0.0), |a, w| {
                     (a.0 + w.0 / m as f64, a.1 + w.1 / m as f64)
                 });
@@ -1231,15 +1285,14 @@ impl Sections<'_> {
                 if spread <= 0.0 || target <= spread {
                     return None;
                 }
-                let k = target / spread;
-                let poly: Vec<(f64, f64)> = wall
-                    .iter()
-                    .map(|w| (g.0 + k * (w.0 - g.0), g.1 + k * (w.1 - g.1)))
-                    .collect();
-                dirs.iter()
-                    .enumerate()
-                    .map(|(j, &dir)| ray_polygon(dir, &poly).map(|t| t - base(i, j)))
-                    .collect()
+                let widened = scaled_section(&wall, g, target / spread, &dirs)?;
+                Some(
+                    widened
+                        .iter()
+                        .enumerate()
+                        .map(|(j, t)| t - base(i, j))
+                        .collect(),
+                )
             })
             .collect();
         for (i, row) in rows.into_iter().enumerate() {
@@ -1404,7 +1457,7 @@ fn fit_circle(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
 
 /// Distance from the origin along the unit direction `dir` to the closed polygon `poly` (the
 /// nearest crossing ahead), 2-D.
-pub(super) fn ray_polygon(dir: (f64, f64), poly: &[(f64, f64)]) -> Option<f64> {
+fn ray_polygon(dir: (f64, f64), poly: &[(f64, f64)]) -> Option<f64> {
     let n = poly.len();
     let mut best: Option<f64> = None;
     for a in 0..n {
@@ -1448,10 +1501,7 @@ fn make_tube(
         _ => points,
     };
     let frames = frames(&points, &a.into);
-    let mut acc = vec![0.0];
-    for w in points.windows(2) {
-        acc.push(acc.last().unwrap() + (w[1] - w[0]).norm());
-    }
+    let acc = arc_lengths(&points);
     let total = acc.last().copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
     let weight: Vec<f64> = acc.iter().map(|s| s / total).collect();
     // A section that is not clear of D (next to a junction) or not the vessel's own is not
@@ -1527,10 +1577,7 @@ impl GuideTube {
         radii: Vec<f64>,
         m: usize,
     ) -> GuideTube {
-        let mut acc = vec![0.0; points.len()];
-        for i in 1..points.len() {
-            acc[i] = acc[i - 1] + (points[i] - points[i - 1]).norm();
-        }
+        let acc = arc_lengths(&points);
         let total = acc.last().copied().unwrap_or(0.0).max(f64::MIN_POSITIVE);
         GuideTube {
             chunks: bounding_chunks(&points),

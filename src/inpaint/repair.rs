@@ -450,12 +450,7 @@ pub fn repair_with_centerline(
                         computed = if opts.intact_lumen.iter().any(|&i| i) {
                             HealthyVessel::new(mesh, c, &StenosisFindOptions::default())
                         } else {
-                            HealthyVessel {
-                                centerline: c,
-                                profiles: Vec::new(),
-                                narrowing: Vec::new(),
-                                lesions: Vec::new(),
-                            }
+                            HealthyVessel::unmeasured(c)
                         };
                         Some(&computed)
                     }

@@ -25,13 +25,13 @@
 //! the junction's flare or on the end's taper, and the fill filled the carina instead of the
 //! lesion (the held-out seed 23 of `benches/repair_real`: the capped aorta's left iliac, 11.4h).
 
-use super::guided::{frames, on_branch, ray_polygon, smooth_path, GuideTube};
+use super::guided::{frames, ray_dirs, read_wall, scaled_section, smooth_path, GuideTube};
 use super::region::Ball;
 use crate::bvh::MeshBvh;
 use crate::centerline::healthy::HealthyVessel;
 use nalgebra::Point3;
 use rayon::prelude::*;
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::PI;
 
 /// A stretch is a lesion to widen where its equivalent diameter falls this far below the local
 /// reference somewhere (a fraction; the profile's own noise is about 1%).
@@ -215,21 +215,17 @@ fn widened_section(
     target: f64,
     rays: usize,
 ) -> Option<Vec<f64>> {
-    let dirs: Vec<(f64, f64)> = (0..rays)
-        .map(|j| {
-            let th = TAU * j as f64 / rays as f64;
-            (th.cos(), th.sin())
-        })
-        .collect();
-    let mut wall = Vec::with_capacity(rays);
-    for &(cs, sn) in &dirs {
-        let d = f[1] * cs + f[2] * sn;
-        let hit = bvh.cast_ray(c, &d, target)?;
-        if !(hit.t > 0.0 && on_branch(centerline, &(c + d * hit.t), &[bi], 0.5 * target)) {
-            return None;
-        }
-        wall.push((hit.t * cs, hit.t * sn));
-    }
+    let dirs = ray_dirs(rays);
+    let wall = read_wall(
+        bvh,
+        centerline,
+        c,
+        f,
+        &dirs,
+        &[bi],
+        |_| target,
+        |_| 0.5 * target,
+    )?;
     // Area and centroid of the wall's polygon (shoelace).
     let (mut area2, mut gx, mut gy) = (0.0, 0.0, 0.0);
     for j in 0..rays {
@@ -248,9 +244,5 @@ fn widened_section(
     if k <= 1.0 {
         return Some(wall.iter().map(|w| w.0.hypot(w.1)).collect());
     }
-    let poly: Vec<(f64, f64)> = wall
-        .iter()
-        .map(|w| (gx + k * (w.0 - gx), gy + k * (w.1 - gy)))
-        .collect();
-    dirs.iter().map(|&dir| ray_polygon(dir, &poly)).collect()
+    scaled_section(&wall, (gx, gy), k, &dirs)
 }

@@ -158,8 +158,8 @@ pub const PICKED_STENOSIS: &str = "picked stenosis";
 
 /// A narrowing's region whose output is still narrowed by this much or more (`residual_stenosis_pct`)
 /// was not restored: the repair says so in a notice (the threshold of a narrowing worth
-/// repairing, as `--stenoses` and a picked point take it).
-pub const UNRESTORED_NARROWING_PCT: f64 = 20.0;
+/// repairing, as a picked point takes it).
+pub const UNRESTORED_NARROWING_PCT: f64 = crate::inpaint::pipeline::PICKED_STENOSIS_MIN_PCT;
 
 /// (1 − output / healthy diameter) × 100.
 fn residual_pct(output: f64, healthy: f64) -> f64 {
