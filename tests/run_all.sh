@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # The project's test command (what CI runs): the Rust tests, the Python reference oracle's own
-# tests, and the Python package (python/: its wheel built by maturin, installed into the oracle
-# venv, and its pytest), a few minutes from a warm build. Run from anywhere; extra arguments go
-# to `cargo test`.
+# tests, the Python package (python/: its wheel built by maturin, installed into the oracle
+# venv, and its pytest), and a 60 s smoke run of every fuzz target at once (fuzz/smoke.sh), a few
+# minutes from a warm build. Run from anywhere; extra arguments go to `cargo test`.
 #
 #   bash tests/run_all.sh                 # the quick suite
 #   bash tests/run_all.sh --test io       # cargo test --release --test io, then the Python steps
 #   bash tests/run_slow.sh                # the slow real-mesh studies only (= run_all.sh --slow)
+#   VESSELMSR_FUZZ_SECONDS=10 bash tests/run_all.sh   # a shorter fuzz smoke (0 skips it);
+#                                         # ignored when CI=true: CI always runs it for 60 s
 #
 # The slow studies are Rust tests in a module `slow` marked
 # #[ignore = "slow: run by tests/run_slow.sh"]; the quick suite keeps a cheaper case of each.
@@ -34,7 +36,14 @@ ROOT="$(pwd)"
 VENV="$ROOT/reference/.venv"
 REQ="$ROOT/reference/requirements.txt"
 STAMP="$VENV/.requirements.sha256"
-if $slow; then steps=2; else steps=5; fi
+if $slow; then steps=2; else steps=6; fi
+fuzz_seconds="${VESSELMSR_FUZZ_SECONDS:-60}"
+if [[ "${CI:-}" == true ]]; then
+    fuzz_seconds=60
+elif ! [[ "$fuzz_seconds" =~ ^(0|[1-9][0-9]*)$ ]]; then
+    echo "run_all: VESSELMSR_FUZZ_SECONDS must be a number of seconds (0 skips the fuzz smoke)" >&2
+    exit 2
+fi
 
 step() { printf '\n==== [%s/%s] %s\n' "$1" "$steps" "${*:2}"; }
 
@@ -102,6 +111,21 @@ if ! $slow && [[ $rust_status -eq 0 ]]; then
     fi
 fi
 
+fuzz_status=0
+fuzz_time="skipped"
+if ! $slow; then
+    # Independent of the steps above (its own workspace and build in fuzz/), so it runs whatever
+    # they gave.
+    if [[ $fuzz_seconds -gt 0 ]]; then
+        step 6 "fuzz smoke: every fuzz target at once for $fuzz_seconds s (fuzz/smoke.sh)"
+        fuzz_start=$SECONDS
+        bash "$ROOT/fuzz/smoke.sh" "$fuzz_seconds" || fuzz_status=$?
+        fuzz_time="$((SECONDS - fuzz_start)) s"
+    else
+        step 6 "fuzz smoke: skipped (VESSELMSR_FUZZ_SECONDS=0)"
+    fi
+fi
+
 # Summary: counts of the Rust tests, the ignored tests by reason, the tests that skipped checks.
 echo
 echo "==== summary"
@@ -137,13 +161,14 @@ fi
 if $slow; then
     echo "time: cargo test ${rust_seconds} s"
 else
-    echo "time: cargo test ${rust_seconds} s, pytest reference ${py_seconds} s, wheel build and install ${wheel_seconds} s, pytest python ${pkg_seconds} s"
+    echo "time: cargo test ${rust_seconds} s, pytest reference ${py_seconds} s, wheel build and install ${wheel_seconds} s, pytest python ${pkg_seconds} s, fuzz smoke ${fuzz_time}"
 fi
 
 echo
-if [[ $rust_status -ne 0 || $py_status -ne 0 || $wheel_status -ne 0 || $pkg_status -ne 0 ]]; then
+if [[ $rust_status -ne 0 || $py_status -ne 0 || $wheel_status -ne 0 || $pkg_status -ne 0 ||
+    $fuzz_status -ne 0 ]]; then
     echo "run_all: FAILED (cargo test exit $rust_status, pytest reference exit $py_status," \
-        "wheel build exit $wheel_status, pytest python exit $pkg_status)"
+        "wheel build exit $wheel_status, pytest python exit $pkg_status, fuzz smoke exit $fuzz_status)"
     exit 1
 fi
 if $slow; then
