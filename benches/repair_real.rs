@@ -49,8 +49,10 @@
 //! an infinite Hausdorff distance. For the stenosis, the NASCET and diameter stenosis our report
 //! gives for the damaged input. Then per tool: the medians, the cases within 1.5h and 5% and
 //! within 3h, and on how many cases ours beats each peer (smaller Hausdorff in D, as printed to
-//! 2 decimals; ties by |volume error|); and our whole command's time against MeshLib's filler
-//! call, and against MeshLib's whole run, on the chops.
+//! 2 decimals; ties by |volume error|); ours' cases by how our report says D was filled
+//! (`fill`: through, bridge, junction, dead-end, widened, axial: median and cases beyond 3h);
+//! and our whole command's time against MeshLib's filler call, and against MeshLib's whole run,
+//! on the chops.
 //!
 //! Measured 2026-12-04 (late night) after the speed work of that night (the guided fill sampled
 //! adaptively, the winding numbers built once and by translated moments, the cap's polish rounds
@@ -378,6 +380,9 @@ struct CaseResult {
     stenosis: Option<(Option<f64>, Option<f64>)>,
     /// Our report's timings, "name s" each.
     our_timings: String,
+    /// How our default repair filled the case's regions (the report's `fill`, joined by "+";
+    /// empty: no report).
+    our_fill: String,
 }
 
 /// A real vessel, its centreline and where its ends are.
@@ -1054,6 +1059,17 @@ fn run_case(
         }
         None => (None, None),
     });
+    let our_fill = report
+        .as_ref()
+        .and_then(|r| r["regions"].as_array().cloned())
+        .map(|regions| {
+            regions
+                .iter()
+                .map(|g| g["fill"].as_str().unwrap_or("?").to_string())
+                .collect::<Vec<_>>()
+                .join("+")
+        })
+        .unwrap_or_default();
     let our_timings = report
         .as_ref()
         .and_then(|r| r["timings"].as_object().cloned())
@@ -1098,6 +1114,7 @@ fn run_case(
         meshlib_run,
         stenosis,
         our_timings,
+        our_fill,
     }
 }
 
@@ -1245,6 +1262,30 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
             format!("{within3}/{}", got.len()),
             per_kind.join(", ")
         );
+    }
+    // Ours by how the regions were filled (the report's `fill`): where the fill is least sure.
+    let mut fills: Vec<&str> = results.iter().map(|r| r.our_fill.as_str()).collect();
+    fills.sort_unstable();
+    fills.dedup();
+    let by_fill: Vec<String> = fills
+        .iter()
+        .filter(|f| !f.is_empty())
+        .map(|f| {
+            let hd: Vec<f64> = results
+                .iter()
+                .filter(|r| r.our_fill == *f)
+                .filter_map(|r| r.outcomes[0].as_ref().map(|o| o.hausdorff_h))
+                .collect();
+            let beyond = hd.iter().filter(|&&h| h > 3.0).count();
+            format!(
+                "{f} {} (median {}, beyond 3h {beyond})",
+                hd.len(),
+                fmt_h(median_all(hd))
+            )
+        })
+        .collect();
+    if !by_fill.is_empty() {
+        println!("  ours by fill: {}", by_fill.join(", "));
     }
     // Ours (the default method) against each other tool, case by case.
     for (t, tool) in tools.iter().enumerate().skip(1) {

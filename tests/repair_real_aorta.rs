@@ -128,11 +128,18 @@ fn chop_and_repair(file: &str, centre: [f64; 3], radius: f64, dir: &Path) -> (f6
 #[test]
 fn a_hole_in_the_open_aorta_is_filled_without_a_slit() {
     let dir = tempfile::tempdir().unwrap();
-    let (hd, ve, _) = chop_and_repair(
+    let (hd, ve, report) = chop_and_repair(
         "aorta_abdominal_open_ends.stl",
         [210.9, 116.7, 24.33],
         6.647,
         dir.path(),
+    );
+    // A wall on one vessel: continued through D, no junction notice.
+    assert_eq!(report["regions"][0]["fill"], "through", "{report}");
+    assert!(
+        !report["notices"].to_string().contains("junction"),
+        "{}",
+        report["notices"]
     );
     // Issue 21 asks for 1.5h (1.23h measured); the damaged input is 21.6h / −12.5%.
     assert!(hd <= 1.5, "{hd}h");
@@ -153,6 +160,15 @@ fn a_hole_beside_the_aortic_bifurcation_stays_within_3h() {
         dir.path(),
     );
     assert_eq!(report["parameters"]["guides"][0], "junction", "{report}");
+    // Filled as a junction, and the report says its shape there is estimated.
+    assert_eq!(report["regions"][0]["fill"], "junction", "{report}");
+    assert!(
+        report["notices"]
+            .to_string()
+            .contains(") spans a junction: its branches are continued"),
+        "{}",
+        report["notices"]
+    );
     // Issue 21 asks every case within 3h (2.48h measured; 3.20h before).
     assert!(hd <= 3.0, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
@@ -280,6 +296,7 @@ fn a_narrowing_beside_a_junction_and_a_closed_end_is_widened_not_the_carina() {
     let (truth, damaged, d) = narrowed("aorta_abdominal_capped.stl", [214.19, 119.13, 27.74]);
     let dir = tempfile::tempdir().unwrap();
     let (_, report) = repair_by_cli(&damaged, "--stenoses=30", dir.path());
+    assert_eq!(report["regions"][0]["fill"], "widened", "{report}");
     let residual = report["regions"][0]["residual_stenosis_pct"]
         .as_f64()
         .unwrap();

@@ -298,12 +298,13 @@ fn print_summary(r: &RepairReport, secs: f64) {
     for (k, g) in r.regions.iter().enumerate() {
         let pct = |p: Option<f64>| p.map_or("n/a".to_string(), |p| format!("{p:.1}%"));
         println!(
-            "region {} ({}, {}, {}) radius {}: inpainted {} ({:.2}% of the output); stenosis: diameter {}, area {}, NASCET {}",
+            "region {} ({}, {}, {}) radius {}{}: inpainted {} ({:.2}% of the output); stenosis: diameter {}, area {}, NASCET {}",
             k + 1,
             n(g.center[0]),
             n(g.center[1]),
             n(g.center[2]),
             n(g.radius),
+            g.fill.map_or(String::new(), |f| format!(", filled {f}")),
             v(g.inpainted_volume),
             100.0 * g.inpainted_fraction,
             pct(g.diameter_stenosis_pct),

@@ -192,6 +192,27 @@ pub enum GuideKind {
     Junction,
     /// A single branch ends in D: continued along its centreline and capped.
     DeadEnd,
+    /// A narrowing widened to the healthy lumen between its shoulders ([`super::widen`]).
+    Widened,
+}
+
+impl GuideKind {
+    /// How a region D whose group of balls has these curves was filled, for the report: the
+    /// least certain kind first (a junction's carina and flare are modelled, not measured).
+    pub fn region_fill(kinds: &[GuideKind]) -> &'static str {
+        let has = |k: GuideKind| kinds.contains(&k);
+        if has(GuideKind::Junction) {
+            "junction"
+        } else if has(GuideKind::DeadEnd) {
+            "dead-end"
+        } else if has(GuideKind::Bridge) {
+            "bridge"
+        } else if has(GuideKind::Widened) {
+            "widened"
+        } else {
+            "through"
+        }
+    }
 }
 
 /// The guide of one group of overlapping balls.
@@ -286,7 +307,7 @@ pub fn plan_guides(
         if let Some(tubes) = widened {
             out.push(RegionGuide {
                 balls: group,
-                kinds: vec![GuideKind::Through; tubes.len()],
+                kinds: vec![GuideKind::Widened; tubes.len()],
                 tubes,
                 fillet: 0.0,
             });
@@ -1722,6 +1743,19 @@ pub fn fill_guided(phi: &mut Grid3, balls: &[Ball], guides: &[RegionGuide]) -> u
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_region_is_reported_by_its_least_certain_curve() {
+        use GuideKind::*;
+        assert_eq!(
+            GuideKind::region_fill(&[Through, Junction, Through]),
+            "junction"
+        );
+        assert_eq!(GuideKind::region_fill(&[Through, DeadEnd]), "dead-end");
+        assert_eq!(GuideKind::region_fill(&[Bridge, Through]), "bridge");
+        assert_eq!(GuideKind::region_fill(&[Widened, Widened]), "widened");
+        assert_eq!(GuideKind::region_fill(&[Through]), "through");
+    }
 
     #[test]
     fn hermite_follows_a_quarter_circle() {

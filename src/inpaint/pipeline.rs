@@ -30,8 +30,8 @@ use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
 use crate::mesh::units::{check_vessel_scale, VesselScaleOptions};
 use crate::report::repair_report::{
-    is_stenosis_source, region_reports, surface_measures, unrestored_narrowing, LoopReport,
-    MeshPart, RepairParameters, RepairReport, DETECTED_STENOSIS, PICKED_STENOSIS,
+    is_stenosis_source, modelled_junction, region_reports, surface_measures, unrestored_narrowing,
+    LoopReport, MeshPart, RepairParameters, RepairReport, DETECTED_STENOSIS, PICKED_STENOSIS,
 };
 use crate::{Error, Result, TriMesh};
 use std::path::PathBuf;
@@ -298,7 +298,7 @@ pub fn repair_vessel(
     };
     events(RepairEvent::Stage("measuring"));
     let measure_start = Instant::now();
-    let regions = region_reports(
+    let mut regions = region_reports(
         &result.closed_input,
         &result.mesh,
         &balls,
@@ -306,11 +306,16 @@ pub fn repair_vessel(
         healthy.as_ref(),
         result.windings.as_ref().map(|(i, o)| [i, o]),
     );
-    // A narrowing left narrowed is no silent failure.
+    for (region, &fill) in regions.iter_mut().zip(&result.region_fill) {
+        region.fill = Some(fill);
+    }
+    // A narrowing left narrowed, a junction's shape estimated: no silent failure.
     for (k, region) in regions.iter().enumerate() {
-        if let Some(n) = unrestored_narrowing(k + 1, region) {
-            result.notices.push(n);
-        }
+        let notices = [
+            unrestored_narrowing(k + 1, region),
+            modelled_junction(k + 1, region),
+        ];
+        result.notices.extend(notices.into_iter().flatten());
     }
     let info = mesh_info(&result.mesh);
     let input_info = mesh_info(&result.closed_input);
@@ -401,6 +406,7 @@ fn unrepaired(mesh: &TriMesh, opts: &RepairOptions) -> Result<Repair> {
         stitched: false,
         fallback: None,
         guides: Vec::new(),
+        region_fill: Vec::new(),
         notices: Vec::new(),
         timings: vec![("cap".into(), start.elapsed().as_secs_f64())],
         windings: None,

@@ -211,6 +211,10 @@ pub struct Repair {
     /// The curves of the `centerline` fill, by kind (a vessel through D, a gap bridged, a
     /// junction branch, a dead end).
     pub guides: Vec<GuideKind>,
+    /// How each ball of D was filled: for `centerline`, its group's kind
+    /// ([`GuideKind::region_fill`]: `through`, `bridge`, `junction`, `dead-end`, `widened`) or
+    /// `axial` where no vessel passes through it on the centreline; otherwise the method's name.
+    pub region_fill: Vec<&'static str>,
     /// One-line notices (regions filled another way than asked, and why).
     pub notices: Vec<String>,
     /// Seconds per phase.
@@ -430,6 +434,7 @@ pub fn repair_with_centerline(
     let mut axes = Vec::new();
     let mut junctions = 0;
     let mut guides = Vec::new();
+    let mut region_fill = vec![opts.method.as_str(); balls.len()];
     let mut iterations = 1;
     let mut converged = true;
     let mut psi = match opts.method {
@@ -485,8 +490,16 @@ pub fn repair_with_centerline(
             for g in &plans {
                 for &b in &g.balls {
                     guided_ball[b] = true;
+                    region_fill[b] = GuideKind::region_fill(&g.kinds);
                 }
                 guides.extend(g.kinds.iter().copied());
+            }
+            for (fill, _) in region_fill
+                .iter_mut()
+                .zip(&guided_ball)
+                .filter(|(_, &g)| !g)
+            {
+                *fill = InpaintMethod::Axial.as_str();
             }
             let rest: Vec<Ball> = balls
                 .iter()
@@ -649,6 +662,7 @@ pub fn repair_with_centerline(
         stitched,
         fallback,
         guides,
+        region_fill,
         notices,
         timings,
         windings,
