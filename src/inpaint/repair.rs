@@ -209,7 +209,7 @@ pub struct Repair {
     /// Why the stitch was not used, when it was not.
     pub fallback: Option<String>,
     /// The curves of the `centerline` fill, by kind (a vessel through D, a gap bridged, a
-    /// junction branch, a dead end).
+    /// junction branch, a dead end, a widened narrowing).
     pub guides: Vec<GuideKind>,
     /// How each ball of D was filled: for `centerline`, its group's kind
     /// ([`GuideKind::region_fill`]: `through`, `bridge`, `junction`, `dead-end`, `widened`) or
