@@ -1,16 +1,30 @@
 //! Issue 22's reproducers, each as a regression test: hostile archives and meshes, absurd flags,
 //! outputs that must be all-or-nothing, the shape of every message, and results that do not
-//! depend on the thread count. Inputs are generated here (small).
+//! depend on the thread count. The small reproducers are files in tests/data/reliability (its
+//! README.md says what each reproduces); the few that are large, or whose file name is the
+//! reproducer, are made here.
 
 mod common;
 use common::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Output;
-use vesselmsr::io::{read_npz, write_mesh, write_npz, NpyArray};
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
+}
+
+/// Copies the stored reproducer `name` of tests/data/reliability into `dir` as `as_name` and
+/// returns the copy's path. Commands run on the copy: its short temporary path keeps the words
+/// a message is checked for within the 300 characters it is cut at, and whatever a command
+/// leaves beside its input lands in the temporary folder, where the tests look.
+fn stored(name: &str, dir: &Path, as_name: &str) -> PathBuf {
+    let from = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/reliability")
+        .join(name);
+    let to = dir.join(as_name);
+    std::fs::copy(&from, &to).unwrap_or_else(|e| panic!("{}: {e}", from.display()));
+    to
 }
 
 /// Asserts a clean refusal: exit 2, one error line of at most 300 characters (after the
@@ -59,18 +73,6 @@ fn decompose_small(mesh: &Path, archive: &Path, more: &[&str]) -> Output {
     vesselmsr(&args)
 }
 
-/// A zip archive with one member `name` holding `bytes`.
-fn npz_with(path: &Path, name: &str, bytes: &[u8]) {
-    let file = std::fs::File::create(path).unwrap();
-    let mut zip = zip::ZipWriter::new(file);
-    let opts = zip::write::SimpleFileOptions::default()
-        .compression_method(zip::CompressionMethod::Deflated)
-        .large_file(true);
-    zip.start_file(name, opts).unwrap();
-    zip.write_all(bytes).unwrap();
-    zip.finish().unwrap();
-}
-
 /// `.npy` bytes with the header dict `dict` and `data`.
 fn npy_bytes(dict: &str, data: &[u8]) -> Vec<u8> {
     let mut b = b"\x93NUMPY\x01\x00".to_vec();
@@ -83,21 +85,19 @@ fn npy_bytes(dict: &str, data: &[u8]) -> Vec<u8> {
 #[test]
 fn npz_members_with_broken_headers_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    for (k, dict) in [
-        "{'descr': '<f8', 'fortran_order': False, 'shape': ), }",
-        "{'descr': '<f8', 'fortran_order': False, 'shape': (é, 3), }",
-        "{'descr': '<f8', 'fortran_order': False, 'shape': é, }",
-        "{'descr': '<Ué', 'fortran_order': False, 'shape': (), }",
-        "{'descr': '<U99999999999999999', 'fortran_order': False, 'shape': (), }",
-    ]
-    .iter()
-    .enumerate()
-    {
-        let archive = dir.path().join(format!("broken{k}.npz"));
-        npz_with(&archive, "samples.npy", &npy_bytes(dict, &[0; 24]));
+    // A 'samples' member whose header is 'shape': ), / (é, 3) / é / 'descr': '<Ué' /
+    // '<U99999999999999999'.
+    for name in [
+        "npy_shape_unopened_paren.npz",
+        "npy_shape_multibyte_in_tuple.npz",
+        "npy_shape_multibyte.npz",
+        "npy_descr_multibyte_unicode.npz",
+        "npy_descr_absurd_unicode_length.npz",
+    ] {
+        let archive = stored(name, dir.path(), name);
         let out_mesh = dir.path().join("out.stl");
         let out = vesselmsr(&["reconstruct", s(&archive), "-o", s(&out_mesh)]);
-        assert_refused(&out, &format!("broken{k}.npz"));
+        assert_refused(&out, name);
         assert!(!out_mesh.exists());
     }
 }
@@ -139,40 +139,18 @@ fn an_archive_member_over_the_budget_is_refused_from_its_header() {
 #[test]
 fn archives_with_impossible_parameters_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let (mesh, _) = phantom(dir.path());
-    let archive = dir.path().join("msr.npz");
-    let out = decompose_small(&mesh, &archive, &[]);
-    assert!(out.status.success(), "{out:?}");
-    let members = read_npz(&archive).unwrap();
-    for (field, value, word) in [
-        ("levels", "0", "levels 0"),
-        ("voxel", "-1.0", "voxel -1"),
-        ("velocity", "\"warp\"", "warp"),
+    // The archive of a coarse tube phantom (--voxel 1.5, decomposed at --resolution 24 with one
+    // level) with one field of its params edited.
+    for (name, word) in [
+        ("params_levels_0.npz", "levels 0"),
+        ("params_voxel_negative.npz", "voxel -1"),
+        ("params_velocity_warp.npz", "warp"),
     ] {
-        let edited: Vec<(String, NpyArray)> = members
-            .iter()
-            .map(|(name, a)| {
-                if name != "params" {
-                    return (name.clone(), a.clone());
-                }
-                let vesselmsr::io::NpyData::Text(t) = &a.data else {
-                    panic!("params is text")
-                };
-                let mut p: serde_json::Value = serde_json::from_str(t).unwrap();
-                p[field] = serde_json::from_str(value).unwrap();
-                (name.clone(), NpyArray::text(&p.to_string()))
-            })
-            .collect();
-        let bad = dir.path().join(format!("bad_{field}.npz"));
-        let refs: Vec<(&str, NpyArray)> = edited
-            .iter()
-            .map(|(n, a)| (n.as_str(), a.clone()))
-            .collect();
-        write_npz(&bad, &refs).unwrap();
+        let bad = stored(name, dir.path(), name);
         let out_mesh = dir.path().join("rebuilt.stl");
         let out = vesselmsr(&["reconstruct", s(&bad), "-o", s(&out_mesh)]);
         let e = assert_refused(&out, word);
-        assert!(e.contains(&format!("bad_{field}.npz")), "{e}");
+        assert!(e.contains(name), "{e}");
         assert!(!out_mesh.exists());
     }
 }
@@ -199,12 +177,13 @@ fn absurd_sample_counts_are_refused() {
 #[test]
 fn binary_stl_whose_count_disagrees_with_its_length_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let tris = stl_triangles(&odd_octahedron());
-    for (name, header) in [
-        ("plain.stl", [0u8; 80]),
-        ("solid.stl", stl_header("solid x")),
+    // The odd octahedron's 8 triangles under a count of 1, after a zero header and after one
+    // starting with "solid".
+    for name in [
+        "stl_count_mismatch_plain_header.stl",
+        "stl_count_mismatch_solid_header.stl",
     ] {
-        let path = write_file(dir.path(), name, &binary_stl(&header, 1, &tris));
+        let path = stored(name, dir.path(), name);
         let out = vesselmsr(&["info", s(&path)]);
         let e = assert_refused(&out, "declares 1 triangles but the file holds");
         assert!(e.contains(name), "{e}");
@@ -214,21 +193,14 @@ fn binary_stl_whose_count_disagrees_with_its_length_is_refused() {
 #[test]
 fn meshes_beyond_float32_range_are_never_written() {
     let dir = tempfile::tempdir().unwrap();
-    let mut big = odd_octahedron();
-    for p in &mut big.vertices {
-        *p *= 1e39;
-    }
-    let input = dir.path().join("huge.obj");
-    write_mesh(&input, &big).unwrap();
+    // The odd octahedron scaled by 1e39, then by 1e298.
+    let input = stored("obj_beyond_float32_1e39.obj", dir.path(), "huge.obj");
     let out = dir.path().join("out.stl");
     assert_refused(&vesselmsr(&["cap", s(&input), "-o", s(&out)]), "float32");
     let t = std::time::Instant::now();
     assert_refused(&vesselmsr(&["remesh", s(&input), "-o", s(&out)]), "rescale");
     assert!(t.elapsed().as_secs_f64() < 10.0, "refused at once");
-    for p in &mut big.vertices {
-        *p *= 1e259;
-    }
-    write_mesh(&input, &big).unwrap();
+    stored("obj_beyond_float32_1e298.obj", dir.path(), "huge.obj");
     assert_refused(&vesselmsr(&["remesh", s(&input), "-o", s(&out)]), "rescale");
     let regions = dir.path().join("d.json");
     let truth = dir.path().join("t.stl");
@@ -252,9 +224,8 @@ fn meshes_beyond_float32_range_are_never_written() {
 fn capping_a_triangle_soup_gives_the_surface_it_describes() {
     let dir = tempfile::tempdir().unwrap();
     let closed = odd_octahedron();
-    let soup = soup_of(&closed);
-    let input = dir.path().join("soup.obj");
-    write_mesh(&input, &soup).unwrap();
+    // The odd octahedron's triangles, each with its own three vertices.
+    let input = stored("obj_triangle_soup.obj", dir.path(), "soup.obj");
     let output = dir.path().join("capped.stl");
     let out = vesselmsr(&["cap", s(&input), "-o", s(&output)]);
     assert!(out.status.success(), "{out:?}");
@@ -282,7 +253,7 @@ fn huge_regions_files_are_deduplicated_or_refused_quickly() {
     let out_mesh = dir.path().join("out.stl");
     // 100,000 identical balls: one is kept (then refused by a tiny budget, to stay quick).
     let same = dir.path().join("same.json");
-    let many = serde_json::json!({ "regions": vec![ball.clone(); 100_000] });
+    let many = serde_json::json!({ "regions": vec![ball; 100_000] });
     std::fs::write(&same, many.to_string()).unwrap();
     let t = std::time::Instant::now();
     let out = vesselmsr(&[
@@ -300,16 +271,10 @@ fn huge_regions_files_are_deduplicated_or_refused_quickly() {
     assert!(stderr.contains("--max-memory"), "{stderr}");
     assert_eq!(out.status.code(), Some(2));
     assert!(t.elapsed().as_secs_f64() < 30.0);
-    // 1,000 distinct picked points: refused, naming the regions file.
-    let c = ball["center"].as_array().unwrap();
-    let points: Vec<[f64; 3]> = (0..1000)
-        .map(|k| {
-            let x = c[0].as_f64().unwrap() + 0.004 * k as f64;
-            [x, c[1].as_f64().unwrap(), c[2].as_f64().unwrap() + 2.9]
-        })
-        .collect();
-    let picked = dir.path().join("picked.json");
-    std::fs::write(&picked, serde_json::json!({ "points": points }).to_string()).unwrap();
+    // 1,000 distinct picked points (2.9 above the ball's centre, 0.004 apart along x): refused,
+    // naming the regions file.
+    let name = "regions_1000_picked_points.json";
+    let picked = stored(name, dir.path(), name);
     let t = std::time::Instant::now();
     let out = vesselmsr(&[
         "repair",
@@ -319,7 +284,7 @@ fn huge_regions_files_are_deduplicated_or_refused_quickly() {
         "-o",
         s(&out_mesh),
     ]);
-    assert_refused(&out, "picked.json");
+    assert_refused(&out, name);
     assert!(t.elapsed().as_secs_f64() < 60.0);
     assert!(!out_mesh.exists());
 }
@@ -328,15 +293,11 @@ fn huge_regions_files_are_deduplicated_or_refused_quickly() {
 fn regions_file_errors_name_the_json_file() {
     let dir = tempfile::tempdir().unwrap();
     let (mesh, _) = phantom(dir.path());
-    let far = dir.path().join("far.json");
-    std::fs::write(
-        &far,
-        r#"{"regions": [{"center": [1000, 0, 0], "radius": 1}]}"#,
-    )
-    .unwrap();
+    let name = "regions_ball_far_from_mesh.json";
+    let far = stored(name, dir.path(), name);
     let out_mesh = dir.path().join("out.stl");
     let out = vesselmsr(&["repair", s(&mesh), "--regions", s(&far), "-o", s(&out_mesh)]);
-    let e = assert_refused(&out, "far.json");
+    let e = assert_refused(&out, name);
     assert!(!e.contains("tube.stl"), "{e}");
 }
 
@@ -395,8 +356,10 @@ fn sigterm_removes_staged_outputs_and_exits_130() {
 #[test]
 fn messages_are_one_clean_line() {
     let dir = tempfile::tempdir().unwrap();
+    // The file name is the reproducer (made here: git cannot portably hold an ESC and a
+    // newline in a name); its contents are an ASCII STL cut after its first facet line.
     let name = "bad\x1b[31mname\n.stl";
-    let path = write_file(dir.path(), name, b"solid x\nfacet normal 0 0 1\n");
+    let path = stored("stl_ascii_cut_after_facet.stl", dir.path(), name);
     let e = assert_refused(&vesselmsr(&["info", s(&path)]), "bad\\x1b[31mname\\n.stl");
     assert!(!e.contains('\x1b'));
     let folder = dir.path().join("w".repeat(200));
@@ -422,8 +385,7 @@ fn messages_are_one_clean_line() {
 fn thread_count_does_not_change_any_output() {
     let dir = tempfile::tempdir().unwrap();
     let (mesh, regions) = phantom(dir.path());
-    let points = dir.path().join("points.json");
-    std::fs::write(&points, r#"{"points": [[-2.74, -1.22, 3.5]]}"#).unwrap();
+    let points = stored("points_one_on_tube_wall.json", dir.path(), "points.json");
     let run = |threads: &str| -> Vec<(String, Vec<u8>)> {
         let t = dir.path().join(format!("t{threads}"));
         std::fs::create_dir(&t).unwrap();
