@@ -196,13 +196,16 @@ pub enum GuideKind {
     Widened,
 }
 
+/// The report's `fill` of a region filled as a junction ([`GuideKind::region_fill`]).
+pub const JUNCTION_FILL: &str = "junction";
+
 impl GuideKind {
     /// How a region D whose group of balls has these curves was filled, for the report: the
     /// least certain kind first (a junction's carina and flare are modelled, not measured).
     pub fn region_fill(kinds: &[GuideKind]) -> &'static str {
         let has = |k: GuideKind| kinds.contains(&k);
         if has(GuideKind::Junction) {
-            "junction"
+            JUNCTION_FILL
         } else if has(GuideKind::DeadEnd) {
             "dead-end"
         } else if has(GuideKind::Bridge) {
@@ -949,8 +952,9 @@ pub(super) fn frames(pts: &[Point3<f64>], t0: &Vector3<f64>) -> Vec<[Vector3<f64
     out
 }
 
-/// Whether wall point `p` belongs to the branches `own` (any branch when empty): no other branch
-/// of `centerline` is nearer by more than a quarter of `radius`.
+/// Whether wall point `p` belongs to the branches `own` (a tube's anchors' branches; any branch
+/// when empty): no other branch of `centerline` is nearer by more than a quarter of `radius` (a
+/// ray that crossed a junction into a neighbouring vessel ends on that vessel's wall).
 pub(super) fn on_branch(
     centerline: &Centerline,
     p: &Point3<f64>,
@@ -1056,14 +1060,6 @@ struct Sections<'a> {
 }
 
 impl Sections<'_> {
-    /// Whether wall point `p` belongs to the branches `own` (a tube's anchors' branches; any
-    /// branch when empty): no other branch of the centreline is nearer by more than a quarter
-    /// of `radius` (a ray that crossed a junction into a neighbouring vessel ends on that
-    /// vessel's wall).
-    fn on_branch(&self, p: &Point3<f64>, own: &[usize], radius: f64) -> bool {
-        on_branch(self.centerline, p, own, radius)
-    }
-
     /// Whether `face` is one of the holes' cap triangles (false without caps).
     fn is_cap(&self, face: u32) -> bool {
         self.cap
@@ -1105,7 +1101,9 @@ impl Sections<'_> {
                 self.bvh
                     .cast_ray(c, &d, reach)
                     .map(|hit| hit.t)
-                    .filter(|&t| t > 0.0 && self.on_branch(&(c + d * t), &[branch], a.radius))
+                    .filter(|&t| {
+                        t > 0.0 && on_branch(self.centerline, &(c + d * t), &[branch], a.radius)
+                    })
             })
             .collect();
         let good = raw.iter().filter(|r| r.is_some()).count();
@@ -1210,7 +1208,7 @@ impl Sections<'_> {
                     (hit.t > 0.0
                         && (hit.t - rho).abs() < 0.5 * rho
                         && known_wall(&wall, hit.face)
-                        && self.on_branch(&wall, own, rho))
+                        && on_branch(self.centerline, &wall, own, rho))
                     .then_some(hit.t - rho)
                 })
             })
@@ -1365,7 +1363,7 @@ impl Sections<'_> {
                     let wall = c + d * hit.t;
                     if (hit.t - radius).abs() < 0.5 * radius
                         && !self.is_cap(hit.face)
-                        && self.on_branch(&wall, own, radius)
+                        && on_branch(self.centerline, &wall, own, radius)
                     {
                         known.push((hit.t * th.cos(), hit.t * th.sin()));
                         angles.push(j);
@@ -1614,9 +1612,7 @@ impl GuideTube {
             detail: radii,
         }
     }
-}
 
-impl GuideTube {
     /// Section radius at sample `i` and angle `theta` (radians, in the sample's frame).
     fn radius_at(&self, i: usize, theta: f64) -> f64 {
         let m = self.start_profile.len();

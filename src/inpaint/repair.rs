@@ -487,19 +487,14 @@ pub fn repair_with_centerline(
                 )
             });
             let mut guided_ball = vec![false; balls.len()];
+            // A ball no curve guides is filled along its axis.
+            region_fill = vec![InpaintMethod::Axial.as_str(); balls.len()];
             for g in &plans {
                 for &b in &g.balls {
                     guided_ball[b] = true;
                     region_fill[b] = GuideKind::region_fill(&g.kinds);
                 }
                 guides.extend(g.kinds.iter().copied());
-            }
-            for (fill, _) in region_fill
-                .iter_mut()
-                .zip(&guided_ball)
-                .filter(|(_, &g)| !g)
-            {
-                *fill = InpaintMethod::Axial.as_str();
             }
             let rest: Vec<Ball> = balls
                 .iter()

@@ -9,7 +9,7 @@ use super::stenosis::{measure_stenosis_with, volume_in_ball_with, StenosisOption
 use crate::bvh::{WindingNumber, WindingOptions};
 use crate::centerline::healthy::HealthyVessel;
 use crate::error::short_number;
-use crate::inpaint::guided::GuideKind;
+use crate::inpaint::guided::{GuideKind, JUNCTION_FILL};
 use crate::inpaint::region::Ball;
 use crate::mesh::decimate::DecimateReport;
 use crate::mesh::info::MeshInfo;
@@ -190,13 +190,13 @@ pub fn unrestored_narrowing(k: usize, region: &RegionReport) -> Option<String> {
     ))
 }
 
-/// The notice for a region filled as a junction (`fill` "junction"): the branches are continued
+/// The notice for a region filled as a junction (`fill` [`JUNCTION_FILL`]): the branches are continued
 /// to a junction point that the fill places, so the shape of the carina and the flare inside D
 /// is an estimate. Such fills are the least accurate of the repair: on the real damage of
 /// `benches/repair_real` (seeds 21–23), 8 of the 14 regions filled as a junction end beyond 3
 /// voxels of the truth, against 4 of the 61 others. `k` counts regions from 1.
 pub fn modelled_junction(k: usize, region: &RegionReport) -> Option<String> {
-    if region.fill != Some("junction") {
+    if region.fill != Some(JUNCTION_FILL) {
         return None;
     }
     let [x, y, z] = region.center.map(short_number);
