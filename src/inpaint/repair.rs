@@ -230,6 +230,13 @@ pub struct Repair {
 /// took 10–120 s a phantom, paper 1,100 s on the stenosis one (12 rounds, not converged).
 pub const MOTION_VOXELS_PER_RADIUS: f64 = 8.0;
 
+/// Where D only grazes the input's surface (a ball on one wall reaching just past another
+/// wall, or another branch), the input's triangles are kept: a connected piece of the faces D
+/// reaches that lies within this depth inside ∂D throughout (voxels) is not cut out. The patch,
+/// cut deeper than that, has no loop there to meet such a hole, and the stitch used to fail for
+/// it and re-mesh the whole vessel (the open aorta's chop 2 of benches/repair_real seed 25).
+const GRAZE_VOXELS: f64 = 1.0;
+
 /// Sub-box margin around D beyond the balls, in voxels (the fills that grow the shape add half
 /// the largest radius and their growth c·T).
 const MARGIN_VOXELS: f64 = 6.0;
@@ -375,7 +382,7 @@ pub fn repair_with_centerline(
     // sequential sign flood leaves a core free for.
     let (phi0, cut) = rayon::join(
         || voxelize(&closed_input, dims, transform, &VoxelizeOptions::default()),
-        || cut_out(&closed_input, balls),
+        || cut_out(&closed_input, balls, GRAZE_VOXELS * h),
     );
     let mut phi0 = phi0?;
     // True distances away from the surface too: the fills compare and interpolate them. The

@@ -1,5 +1,6 @@
 //! Stitching the inpainted patch into the original mesh (`--keep-outside`): the triangles of the
-//! input with every vertex outside D are kept unchanged; the marching-cubes surface of the
+//! input with every vertex outside D are kept unchanged (and so are those of a piece of surface
+//! that D only grazes, within a given depth of ∂D throughout); the marching-cubes surface of the
 //! inpainted φ is kept where it lies deeper than a margin inside D; each hole the removal left is
 //! joined to the patch boundary loop facing it by a strip of triangles (a zipper that advances
 //! along whichever loop gives the shorter new edge). The result is checked (closed where the input
@@ -81,14 +82,16 @@ pub struct CutOut {
     pub open_edges: usize,
 }
 
-/// Cuts D out of `mesh` (see [`CutOut`]).
-pub fn cut_out(mesh: &TriMesh, balls: &[Ball]) -> CutOut {
-    let inside: Vec<bool> = mesh
-        .vertices
-        .iter()
-        .map(|p| depth_in(balls, p) > 0.0)
-        .collect();
-    let (kept, source) = submesh(mesh, |f| f.iter().all(|&v| !inside[v as usize]));
+/// Cuts D out of `mesh` (see [`CutOut`]), except where D only grazes the surface: a connected
+/// piece of the faces D reaches whose every vertex lies within `keep_within` (world units) of
+/// ∂D is kept (a patch cut deeper than that has no loop there to meet its hole).
+pub fn cut_out(mesh: &TriMesh, balls: &[Ball], keep_within: f64) -> CutOut {
+    let depth: Vec<f64> = mesh.vertices.iter().map(|p| depth_in(balls, p)).collect();
+    let inside: Vec<bool> = depth.iter().map(|&d| d > 0.0).collect();
+    let grazed = grazed_vertices(mesh, &depth, keep_within);
+    let (kept, source) = submesh(mesh, |f| {
+        f.iter().all(|&v| !inside[v as usize] || grazed[v as usize])
+    });
     let edges = EdgeMap::new(mesh);
     let open: HashSet<[u32; 2]> = (0..edges.num_edges())
         .filter(|&e| edges.valence(e) == 1)
@@ -107,6 +110,41 @@ pub fn cut_out(mesh: &TriMesh, balls: &[Ball]) -> CutOut {
         holes,
         open_edges: open.len(),
     }
+}
+
+/// The vertices inside D (depth > 0) whose connected piece of inside vertices (joined through
+/// the faces they share) lies within `keep_within` of ∂D throughout.
+fn grazed_vertices(mesh: &TriMesh, depth: &[f64], keep_within: f64) -> Vec<bool> {
+    let n = mesh.vertices.len();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(p: &mut [u32], mut i: u32) -> u32 {
+        while p[i as usize] != i {
+            p[i as usize] = p[p[i as usize] as usize];
+            i = p[i as usize];
+        }
+        i
+    }
+    for f in &mesh.faces {
+        let inner: Vec<u32> = f
+            .iter()
+            .copied()
+            .filter(|&v| depth[v as usize] > 0.0)
+            .collect();
+        for w in inner.windows(2) {
+            let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+            parent[a.max(b) as usize] = a.min(b);
+        }
+    }
+    let mut deepest = vec![0.0f64; n];
+    for v in 0..n as u32 {
+        if depth[v as usize] > 0.0 {
+            let r = find(&mut parent, v) as usize;
+            deepest[r] = deepest[r].max(depth[v as usize]);
+        }
+    }
+    (0..n as u32)
+        .map(|v| depth[v as usize] > 0.0 && deepest[find(&mut parent, v) as usize] <= keep_within)
+        .collect()
 }
 
 fn centroid(mesh: &TriMesh, lp: &[u32]) -> Point3<f64> {
@@ -241,4 +279,45 @@ fn stitch_at(cut: &CutOut, patch: &TriMesh, balls: &[Ball], margin: f64) -> Resu
         )));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::primitives::icosphere;
+
+    /// Two unit spheres 0.3 apart; D a ball of radius 0.5 on the first one's wall, facing the
+    /// second, which it reaches 0.2 deep at most.
+    fn grazing() -> (TriMesh, Ball) {
+        let mut mesh = icosphere(4, 1.0, Point3::origin());
+        mesh.append(&icosphere(4, 1.0, Point3::new(2.3, 0.0, 0.0)));
+        let ball = Ball {
+            center: Point3::new(1.0, 0.0, 0.0),
+            radius: 0.5,
+        };
+        (mesh, ball)
+    }
+
+    #[test]
+    fn a_grazed_wall_is_kept_and_leaves_no_hole() {
+        let (mesh, ball) = grazing();
+        let second = |m: &TriMesh| {
+            m.faces
+                .iter()
+                .filter(|f| f.iter().all(|&v| m.vertices[v as usize].x > 1.15))
+                .count()
+        };
+        let whole = second(&mesh);
+        // Cut everywhere D reaches: a hole in each sphere.
+        let cut = cut_out(&mesh, &[ball], 0.0);
+        assert_eq!(cut.holes.len(), 2);
+        assert!(second(&cut.kept) < whole);
+        // Grazed pieces no deeper than 0.1 are still cut (the second sphere's reaches 0.2).
+        assert_eq!(cut_out(&mesh, &[ball], 0.1).holes.len(), 2);
+        // Within 0.3 of ∂D: the second sphere is kept whole, the first one's hole stays.
+        let cut = cut_out(&mesh, &[ball], 0.3);
+        assert_eq!(cut.holes.len(), 1);
+        assert_eq!(second(&cut.kept), whole);
+        assert!(cut.kept.num_faces() < mesh.num_faces());
+    }
 }
