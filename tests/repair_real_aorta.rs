@@ -174,9 +174,9 @@ fn a_hole_beside_the_aortic_bifurcation_stays_within_3h() {
     assert!(ve.abs() <= 0.05, "{ve}");
 }
 
-/// The benchmark's chop#2 of the open aorta in the draw of seed 25: a wall chop on the left
-/// iliac whose region D (sized from the hole) reaches a few tenths of a voxel into the right
-/// iliac's wall. That grazed piece was cut out too, the patch had no loop there to meet its
+/// The benchmark's chop#2 of the open aorta in the draw of seed 25: a wall chop on one iliac
+/// whose region D (sized from the hole) reaches less than half a voxel into the other iliac's
+/// wall. That grazed piece was cut out too, the patch had no loop there to meet its
 /// hole ("3 holes around D but 2 patch loops"), and the whole vessel was re-meshed; the grazed
 /// wall is now kept and the patch stitched (`chop_and_repair` asserts it).
 #[test]

@@ -312,7 +312,7 @@ mod tests {
         let cut = cut_out(&mesh, &[ball], 0.0);
         assert_eq!(cut.holes.len(), 2);
         assert!(second(&cut.kept) < whole);
-        // Grazed pieces no deeper than 0.1 are still cut (the second sphere's reaches 0.2).
+        // Kept within 0.1 of ∂D only: the second sphere's piece, 0.2 deep, is still cut.
         assert_eq!(cut_out(&mesh, &[ball], 0.1).holes.len(), 2);
         // Within 0.3 of ∂D: the second sphere is kept whole, the first one's hole stays.
         let cut = cut_out(&mesh, &[ball], 0.3);
