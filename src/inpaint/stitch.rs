@@ -13,7 +13,7 @@
 //! either side of it into one loop; so the margins tried end with shallow ones, down to ∂D itself.
 
 use super::region::{depth_in, Ball};
-use crate::mesh::topology::{boundary_loops, EdgeMap};
+use crate::mesh::topology::{boundary_loops, find, union, EdgeMap};
 use crate::{Error, Result, TriMesh};
 use nalgebra::Point3;
 use std::collections::{HashMap, HashSet};
@@ -116,34 +116,21 @@ pub fn cut_out(mesh: &TriMesh, balls: &[Ball], keep_within: f64) -> CutOut {
 /// the faces they share) lies within `keep_within` of ∂D throughout.
 fn grazed_vertices(mesh: &TriMesh, depth: &[f64], keep_within: f64) -> Vec<bool> {
     let n = mesh.vertices.len();
+    let inside = |v: u32| depth[v as usize] > 0.0;
     let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(p: &mut [u32], mut i: u32) -> u32 {
-        while p[i as usize] != i {
-            p[i as usize] = p[p[i as usize] as usize];
-            i = p[i as usize];
-        }
-        i
-    }
     for f in &mesh.faces {
-        let inner: Vec<u32> = f
-            .iter()
-            .copied()
-            .filter(|&v| depth[v as usize] > 0.0)
-            .collect();
+        let inner: Vec<u32> = f.iter().copied().filter(|&v| inside(v)).collect();
         for w in inner.windows(2) {
-            let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
-            parent[a.max(b) as usize] = a.min(b);
+            union(&mut parent, w[0], w[1]);
         }
     }
     let mut deepest = vec![0.0f64; n];
-    for v in 0..n as u32 {
-        if depth[v as usize] > 0.0 {
-            let r = find(&mut parent, v) as usize;
-            deepest[r] = deepest[r].max(depth[v as usize]);
-        }
+    for v in (0..n as u32).filter(|&v| inside(v)) {
+        let r = find(&mut parent, v) as usize;
+        deepest[r] = deepest[r].max(depth[v as usize]);
     }
     (0..n as u32)
-        .map(|v| depth[v as usize] > 0.0 && deepest[find(&mut parent, v) as usize] <= keep_within)
+        .map(|v| inside(v) && deepest[find(&mut parent, v) as usize] <= keep_within)
         .collect()
 }
 
