@@ -86,12 +86,8 @@ pub struct CutOut {
 /// piece of the faces D reaches whose every vertex lies within `keep_within` (world units) of
 /// ∂D is kept (a patch cut deeper than that has no loop there to meet its hole).
 pub fn cut_out(mesh: &TriMesh, balls: &[Ball], keep_within: f64) -> CutOut {
-    let depth: Vec<f64> = mesh.vertices.iter().map(|p| depth_in(balls, p)).collect();
-    let inside: Vec<bool> = depth.iter().map(|&d| d > 0.0).collect();
-    let grazed = grazed_vertices(mesh, &depth, keep_within);
-    let (kept, source) = submesh(mesh, |f| {
-        f.iter().all(|&v| !inside[v as usize] || grazed[v as usize])
-    });
+    let cut = cut_vertices(mesh, balls, keep_within);
+    let (kept, source) = submesh(mesh, |f| f.iter().all(|&v| !cut[v as usize]));
     let edges = EdgeMap::new(mesh);
     let open: HashSet<[u32; 2]> = (0..edges.num_edges())
         .filter(|&e| edges.valence(e) == 1)
@@ -112,9 +108,10 @@ pub fn cut_out(mesh: &TriMesh, balls: &[Ball], keep_within: f64) -> CutOut {
     }
 }
 
-/// The vertices inside D (depth > 0) whose connected piece of inside vertices (joined through
-/// the faces they share) lies within `keep_within` of ∂D throughout.
-fn grazed_vertices(mesh: &TriMesh, depth: &[f64], keep_within: f64) -> Vec<bool> {
+/// The vertices to cut out: those inside D (depth > 0), but for a connected piece of them
+/// (joined through the faces they share) that lies within `keep_within` of ∂D throughout.
+fn cut_vertices(mesh: &TriMesh, balls: &[Ball], keep_within: f64) -> Vec<bool> {
+    let depth: Vec<f64> = mesh.vertices.iter().map(|p| depth_in(balls, p)).collect();
     let n = mesh.vertices.len();
     let inside = |v: u32| depth[v as usize] > 0.0;
     let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -130,7 +127,7 @@ fn grazed_vertices(mesh: &TriMesh, depth: &[f64], keep_within: f64) -> Vec<bool>
         deepest[r] = deepest[r].max(depth[v as usize]);
     }
     (0..n as u32)
-        .map(|v| inside(v) && deepest[find(&mut parent, v) as usize] <= keep_within)
+        .map(|v| inside(v) && deepest[find(&mut parent, v) as usize] > keep_within)
         .collect()
 }
 
