@@ -195,6 +195,27 @@ fn a_region_that_grazes_the_other_iliac_is_still_stitched() {
     assert!(ve.abs() <= 0.04, "{ve}");
 }
 
+/// The benchmark's chop#1 of the open aorta in the draw of seed 25: a hole in the aorta's top
+/// wall over the bifurcation, filled as a junction. Towards the junction point the wall chart's
+/// biharmonic fill carried the readings' slope on past the last of them and swelled the left
+/// iliac's section to 2.3 times its radius: a bulge 2 mm above the aorta's top wall (8.2h in the
+/// benchmark's measure). Filled details are now held to 0.8 radii outward (`MAX_FILLED_BULGE`).
+#[test]
+fn a_junction_fill_does_not_bulge_over_the_aortas_top_wall() {
+    let dir = tempfile::tempdir().unwrap();
+    let (hd, ve, report) = chop_and_repair(
+        "aorta_abdominal_open_ends.stl",
+        [221.420188694023, 139.57846073912825, 30.69293311715652],
+        13.495492507156944 / 1.3,
+        dir.path(),
+    );
+    assert_eq!(report["regions"][0]["fill"], "junction", "{report}");
+    // 6.26h and +4.8% measured; 8.24h and +6.1% unbounded. Still beyond issue 21's 3h: the
+    // junction's shape is modelled, not measured.
+    assert!(hd <= 7.0, "{hd}h");
+    assert!(ve.abs() <= 0.055, "{ve}");
+}
+
 #[test]
 fn the_inward_capped_aorta_is_repaired_outward() {
     let dir = tempfile::tempdir().unwrap();
