@@ -189,7 +189,7 @@ pub const MAX_RAYS: usize = 128;
 /// junction chop of `benches/repair_real`, a bulge 2 mm above the aorta's top wall. Over the
 /// 105 wall chops of seeds 21–27, bounds of 0.5, 0.65 and 0.8 radii changed the junction fills
 /// only: 8 better and 7 worse, 7 and 2, 5 and 0 (an aneurysm's flare is real and wide); 0.8 is
-/// kept (the junction chops' mean 4.57h → 4.40h; the seed-25 open aorta's 8.24h → 6.25h).
+/// kept (the junction chops' mean 4.57h → 4.40h; the seed-25 open aorta's 8.24h → 6.26h).
 pub const MAX_FILLED_BULGE: f64 = 0.8;
 
 /// Holds each filled (not `known`) detail of a tube's chart (`m` rays per sample) to at most
