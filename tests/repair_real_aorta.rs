@@ -197,7 +197,7 @@ fn a_region_that_grazes_the_other_iliac_is_still_stitched() {
 
 /// The benchmark's chop#1 of the open aorta in the draw of seed 25: a hole in the aorta's top
 /// wall over the bifurcation, filled as a junction. Towards the junction point the wall chart's
-/// biharmonic fill carried the readings' slope on past the last of them and swelled the left
+/// biharmonic fill carried the readings' slope on past the last of them and swelled one
 /// iliac's section to 2.3 times its radius: a bulge 2 mm above the aorta's top wall (8.2h in the
 /// benchmark's measure). Filled details are now held to 0.8 radii outward (`MAX_FILLED_BULGE`).
 #[test]
