@@ -139,6 +139,23 @@ fn every_method_gives_a_closed_outward_vessel() {
             r.iterations
         );
         assert!(info.watertight && info.signed_volume > 0.0, "{method}");
+        // The report's c and T are the ones the method ran with (`paper` once reported msr's
+        // T = R²/2 while running R², `flow` msr's c = 1/R while running 0.3/R).
+        let (big_r, r2) = (r.radius_estimate, r.radius_estimate.powi(2));
+        let used = match method {
+            InpaintMethod::Flow => Some((0.3 / big_r, r2)),
+            InpaintMethod::Paper => Some((1.0 / big_r, r2)),
+            InpaintMethod::Msr => Some((1.0 / big_r, 0.5 * r2)),
+            _ => None,
+        };
+        if let Some((c, t)) = used {
+            assert!(
+                (r.speed - c).abs() < 1e-9 * c && (r.time - t).abs() < 1e-9 * t,
+                "{method}: reported c = {}, T = {}; ran c = {c}, T = {t}",
+                r.speed,
+                r.time
+            );
+        }
         // The fills that carry data across D or grow the shape add volume back into the chopped
         // wall; Algorithm 4 as written only smooths it (its viscosity is a curvature motion),
         // as ../shared/notes/inpainting.md measured.

@@ -133,9 +133,11 @@ pub struct RepairOptions {
     pub keep_outside: bool,
     /// Leave the input's open vessel ends open (default false: they are capped).
     pub open_ends: bool,
-    /// Growth speed c of v = c + κ_a − κ (`msr`, `paper`), 1/world length; default 1/R.
+    /// Growth speed c of v = c + κ_a − κ (`flow`, `msr`, `paper`), 1/world length; default
+    /// 0.3/R for `flow`, 1/R otherwise.
     pub speed: Option<f64>,
-    /// Evolution time T of the coarse level, world length²; default R²/2.
+    /// Evolution time T of the coarse level, world length²; default R² for `flow` and `paper`,
+    /// R²/2 for `msr`.
     pub time: Option<f64>,
     /// Time steps of the coarse level (default 4).
     pub steps: usize,
@@ -190,9 +192,9 @@ pub struct Repair {
     pub grid_dims: [usize; 3],
     /// Vessel radius R estimated around D (largest inside distance near ∂D), world units.
     pub radius_estimate: f64,
-    /// Speed c, time T and first ε used (world units; the latter two for `msr` and `paper`).
+    /// Speed c used (`flow`, `msr`, `paper`; the others use none), 1/world length.
     pub speed: f64,
-    /// Time T of the coarse level, world length².
+    /// Time T of the coarse level used (`flow`, `msr`, `paper`), world length².
     pub time: f64,
     /// First viscosity ε of `paper`, world length².
     pub epsilon: f64,
@@ -424,10 +426,16 @@ pub fn repair_with_centerline(
         None => shell_radius(&phi0, &depth, rmax.max(3.0 * h), None),
     }
     .max(h);
-    let speed = opts.speed.unwrap_or(1.0 / radius_estimate);
-    let time = opts.time.unwrap_or(0.5 * radius_estimate * radius_estimate);
-    let flow_speed = opts.speed.unwrap_or(0.3 / radius_estimate);
-    let flow_time = opts.time.unwrap_or(radius_estimate * radius_estimate);
+    // c and T of the method that runs (the report gives what was used): `flow` 0.3/R and R²,
+    // `paper` 1/R and R², `msr` (and the methods that use neither) 1/R and R²/2.
+    let r2 = radius_estimate * radius_estimate;
+    let (default_speed, default_time) = match opts.method {
+        InpaintMethod::Flow => (0.3 / radius_estimate, r2),
+        InpaintMethod::Paper => (1.0 / radius_estimate, r2),
+        _ => (1.0 / radius_estimate, 0.5 * r2),
+    };
+    let speed = opts.speed.unwrap_or(default_speed);
+    let time = opts.time.unwrap_or(default_time);
     let epsilon = opts
         .epsilon
         .unwrap_or(0.125 * radius_estimate * radius_estimate);
@@ -532,8 +540,8 @@ pub fn repair_with_centerline(
         InpaintMethod::Flow => {
             let steps = opts.flow_steps.max(1);
             let mut flow = Flow::new(
-                Velocity::Inpaint { c: flow_speed },
-                flow_time / steps as f64,
+                Velocity::Inpaint { c: speed },
+                time / steps as f64,
                 FlowOptions {
                     allow_border: true,
                     ..FlowOptions::default()
@@ -550,8 +558,8 @@ pub fn repair_with_centerline(
         }
         InpaintMethod::Paper => {
             let paper = PaperOptions {
-                speed: opts.speed.unwrap_or(1.0 / radius_estimate),
-                time: opts.time.unwrap_or(radius_estimate * radius_estimate),
+                speed,
+                time,
                 levels: opts.steps.max(1),
                 dt: DT_VOXELS2 * h * h,
                 epsilon,
