@@ -199,7 +199,8 @@ fn a_region_that_grazes_the_other_iliac_is_still_stitched() {
 /// wall over the bifurcation, filled as a junction. Towards the junction point the wall chart's
 /// biharmonic fill carried the readings' slope on past the last of them and swelled one
 /// iliac's section to 2.3 times its radius: a bulge 2 mm above the aorta's top wall (8.2h in the
-/// benchmark's measure). Filled details are now held to 0.8 radii outward (`MAX_FILLED_BULGE`).
+/// benchmark's measure). Filled details are now held to 0.8 radii outward (`MAX_FILLED_BULGE`),
+/// and the union of tubes has its bumps shaved (`inpaint::shave`).
 #[test]
 fn a_junction_fill_does_not_bulge_over_the_aortas_top_wall() {
     let dir = tempfile::tempdir().unwrap();
@@ -210,10 +211,10 @@ fn a_junction_fill_does_not_bulge_over_the_aortas_top_wall() {
         dir.path(),
     );
     assert_eq!(report["regions"][0]["fill"], "junction", "{report}");
-    // 6.26h and +4.8% measured; 8.24h and +6.1% unbounded. Still beyond issue 21's 3h: the
-    // junction's shape is modelled, not measured.
-    assert!(hd <= 7.0, "{hd}h");
-    assert!(ve.abs() <= 0.055, "{ve}");
+    // 4.82h and +3.9% measured; 6.26h and +4.8% unshaved, 8.24h and +6.1% unbounded too.
+    // Still beyond issue 21's 3h: the junction's shape is modelled, not measured.
+    assert!(hd <= 5.5, "{hd}h");
+    assert!(ve.abs() <= 0.045, "{ve}");
 }
 
 #[test]

@@ -21,6 +21,7 @@ pub mod region;
 pub mod region_limits;
 pub mod repair;
 pub mod repair_budget;
+pub mod shave;
 pub mod stitch;
 pub mod topology;
 pub mod wall_chart;
