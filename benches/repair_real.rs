@@ -122,6 +122,15 @@
 //! 5.17h against 3.52h, the aneurysm's of seed 23, 9.97h against 9.05h), two wall chops (3.59h,
 //! 3.65h) and the aneurysm's narrowing in two draws (3.56h, 4.01h). Our whole command on a chop:
 //! median 0.49 s (0.35–1.20 s) over the 45, 55× MeshLib's filler call, 1.23× its whole run.
+//!
+//! Re-measured 2026-12-05 (evening, load 1.4–2.2) after a junction fill's bumps were shaved
+//! (`inpaint::shave`): seed 21 1.40h / 1.4%, 11 and 23 of 25, MeshLib beaten on 24; seed 22
+//! 1.20h / 1.7%, 13 and 19; seed 23 1.04h / 0.9%, 16 and 21; all 75: 1.20h / 1.5%, 40 and 63,
+//! MeshLib beaten on 71, pymeshfix on 74, pymeshlab on 75; the 14 junction fills median 3.72h →
+//! 3.35h, still 8 beyond 3h (3.1–10.2h). Seeds 24–27: 1.04, 1.64, 1.52, 1.64h; 46 and 79 of 100;
+//! MeshLib beaten on 87, pymeshfix and pymeshlab on 97. Our whole command on a chop: median
+//! 0.49 s (0.35–1.23 s), 59× MeshLib's filler call, 1.24× its whole run. The table below is
+//! the late-morning run's.
 //! Seed 21 per case:
 //!
 //! | vessel | case | ours h / vol | ours s | MeshLib | pymeshfix | pymeshlab |
