@@ -13,7 +13,7 @@
 //! were; keeping only the inward motion leaves a concave crotch, such as a carina's, as the fill
 //! made it (the motion moves it outward: measured, a mean curvature flow of the same time kept
 //! whole took the capped aorta's junction chop of seed 21 from 3.72 to 4.66 voxels of the truth,
-//! 3.65 inward only).
+//! 3.71 with this module, inward only).
 
 use super::mask::{blend_known, blend_weights, region_depth};
 use super::region::Ball;
