@@ -310,7 +310,7 @@ fn ball_groups(balls: &[Ball]) -> Vec<Vec<usize>> {
 /// gives a vessel (see the module docs); groups without are left out. `mesh_bvh` is the BVH of
 /// the closed damaged input (the sections are read on it), `h` the voxel; `intact[i]`: ball i's
 /// lumen is only narrowed, its centreline the vessel's (a group of such balls may follow it,
-/// [`follow_or_bridge`]; missing entries are false).
+/// `follow_or_bridge`; missing entries are false).
 pub fn plan_guides(
     mesh_bvh: &MeshBvh,
     centerline: &Centerline,
