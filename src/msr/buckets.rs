@@ -5,7 +5,7 @@
 //! offsets[c + 1]]`), so a query reads the few voxels around it, ring by ring, and stops as soon
 //! as no unread voxel can hold a nearer sample: exact, as a k-d tree is, and several times
 //! faster on samples that lie on a surface a fraction of a voxel apart. Blocks of
-//! [`BLOCK`]³ voxels know their distance (in blocks, 26-connected) to the nearest block with a
+//! `BLOCK`³ voxels know their distance (in blocks, 26-connected) to the nearest block with a
 //! sample, so a query far from every sample skips the empty rings or answers at once.
 
 use crate::grid::Grid3;

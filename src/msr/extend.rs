@@ -34,7 +34,7 @@ const NEAREST: usize = 8;
 const BUCKETS_REACH: f64 = 6.0;
 
 /// Extends `values` (one per point of `points`) to every node with |φ| ≤ `band` (world units).
-/// Each node queries around its foot point or itself (`from`), finds its [`NEAREST`] samples
+/// Each node queries around its foot point or itself (`from`), finds its `NEAREST` samples
 /// ([`SampleIndex`]) and takes the mean of their values weighted by exp(−(d² − d_min²)/2σ²), σ =
 /// `radius`/2, so the nearest samples dominate and farther ones only smooth ties. A node whose
 /// nearest sample is farther than `band` + `radius` gets `None`. With [`ExtendFrom::FootPoint`]
@@ -87,7 +87,7 @@ where
 }
 
 /// At every node with |φ| ≤ `band` whose nearest sample is within `reach` (world units) of its
-/// query point (`from`): `reduce(node, nearest)` over its [`NEAREST`] nearest samples, given as
+/// query point (`from`): `reduce(node, nearest)` over its `NEAREST` nearest samples, given as
 /// (index, squared distance to the query point), nearest first and all within `reach`.
 pub fn reduce_nearest<T>(
     phi: &Grid3,
@@ -129,9 +129,9 @@ where
         .collect()
 }
 
-/// The samples of a level, indexed for the queries of the nodes of one grid: the [`NEAREST`]
+/// The samples of a level, indexed for the queries of the nodes of one grid: the `NEAREST`
 /// samples within `reach` (world units) of a point, through [`VoxelBuckets`] for a reach of up
-/// to [`BUCKETS_REACH`] voxels (the tangent planes' few voxels), else through a k-d tree
+/// to `BUCKETS_REACH` voxels (the tangent planes' few voxels), else through a k-d tree
 /// (kiddo) with a coarse occupancy grid that answers "none" at once for the nodes far from
 /// every sample (the buckets' block distances do that themselves).
 pub struct SampleIndex {

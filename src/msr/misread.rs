@@ -32,7 +32,7 @@ use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
 /// A node counts as misread when the rebuild's value differs from φ_{i−1} by more than this
-/// (voxels), or has the other sign where |φ_{i−1}| exceeds [`SIGN_MARGIN`] or the node has no
+/// (voxels), or has the other sign where |φ_{i−1}| exceeds `SIGN_MARGIN` or the node has no
 /// neighbour across S_{i−1}.
 pub const MISREAD_TOLERANCE: f64 = 0.3;
 
