@@ -57,7 +57,11 @@ mod tests {
         let mut g = Grid3::new([n, n, n], t, 0.0).unwrap();
         let dims = g.dims();
         for (idx, v) in g.data_mut().iter_mut().enumerate() {
-            let (i, j, k) = (idx % dims[0], (idx / dims[0]) % dims[1], idx / (dims[0] * dims[1]));
+            let (i, j, k) = (
+                idx % dims[0],
+                (idx / dims[0]) % dims[1],
+                idx / (dims[0] * dims[1]),
+            );
             let p = t.index_to_world(Vector3::new(i as f64, j as f64, k as f64));
             let tube = (p.x * p.x + p.y * p.y).sqrt() - r;
             let bump = (p - Point3::new(r, 0.0, 0.0)).norm() - b;
@@ -104,7 +108,10 @@ mod tests {
         // opposite (curvature 1/r) by t/r, a fifth of that.
         let top = wall(&g, 0.0, 1.0);
         let far = wall(&g, 0.0, -1.0);
-        assert!((r + b - top - 2.0 * t / b).abs() < 0.25 * h, "bump top {top}");
+        assert!(
+            (r + b - top - 2.0 * t / b).abs() < 0.25 * h,
+            "bump top {top}"
+        );
         assert!((r - far - t / r).abs() < 0.25 * h, "far wall {far}");
         // Nothing moves outward, and nothing outside the balls changes.
         let depth = region_depth(&g, &balls);
