@@ -47,14 +47,14 @@
 //!   thresholded a diffused indicator, a non-local coarse level that this project's flows,
 //!   which diffuse a signed distance, do not reproduce.) Measured on that phantom with the
 //!   whole loop (`vesselmsr phantom stenosis`, `repair --method paper -c C --time T`, other
-//!   steps by [`DT_VOXELS2`]; 12 rounds; restored share of the missing volume): at c·T = R it stays at the
-//!   damaged shape for every step of the flow from 4h² to 32h² (−0.6%: the coarse level keeps
-//!   1.25 of the throat's 1.5 deficit, and the intact details give it back); at c·T = 2R the
-//!   throat rises round after round but nothing stops it at the healthy radius: 203%, 128%,
-//!   138%, 142% at steps of 4, 8, 16, 32h² (34–63 s), never converged (at 16h² the throat's
-//!   radius reaches the truth's in round 10 and goes on, 0.2 a round, and the rest of D grows
-//!   too, 0.04 a round: no fixed point at the healthy tube); at c·T = 4R, 42%. No setting is
-//!   kept as a default for it.
+//!   steps by [`DT_VOXELS2`]; 12 rounds; restored share of the missing volume): at c·T = R it
+//!   stays at the damaged shape for every step of the flow from 4h² to 32h² (−0.6%: the coarse
+//!   level keeps 1.25 of the throat's 1.5 deficit, and the intact details give it back); at
+//!   c·T = 2R the throat rises round after round but nothing stops it at the healthy radius:
+//!   203%, 128%, 138%, 142% at steps of 4, 8, 16, 32h² (34–63 s), never converged (at 16h² the
+//!   throat's radius reaches the truth's in round 10 and goes on, 0.2 a round, and the rest of
+//!   D grows too, 0.04 a round: no fixed point at the healthy tube); at c·T = 4R, 42%. No
+//!   setting is kept as a default for it.
 //! - **The ε schedule.** ε is the heat-flow time of the whole IMST (world length², split
 //!   evenly over the levels; default R²/8), divided by 4 every round, so the viscosity
 //!   vanishes as the loop converges (the paper's ε ↘ without a rate).

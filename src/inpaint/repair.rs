@@ -26,7 +26,7 @@
 use super::axial::fill_axial;
 use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::checks::RepairChecks;
-use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions, HoleCaps};
+use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions, HoleCaps, JUNCTION_FILL};
 use super::junction::{fill_junction, Branch};
 use super::known_wall::{hole_rims, keep_known_wall, rim_balls};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
@@ -545,10 +545,11 @@ pub fn repair_with_centerline(
             };
             fill_guided(&mut g, balls, &plans);
             // A junction's union of tubes: its bumps shaved (see `shave`).
-            let junction_balls: Vec<Ball> = plans
+            let junction_balls: Vec<Ball> = balls
                 .iter()
-                .filter(|p| p.kinds.contains(&GuideKind::Junction))
-                .flat_map(|p| p.balls.iter().map(|&b| balls[b]))
+                .zip(&region_fill)
+                .filter(|(_, &fill)| fill == JUNCTION_FILL)
+                .map(|(b, _)| *b)
                 .collect();
             shave_bumps(
                 &mut g,
