@@ -12,7 +12,7 @@ use std::collections::HashSet;
 use vesselmsr::bvh::MeshBvh;
 use vesselmsr::inpaint::phantom::{make_phantom, Phantom, PhantomKind, PhantomOptions};
 use vesselmsr::inpaint::region::Ball;
-use vesselmsr::inpaint::repair::{repair, InpaintMethod, Repair, RepairOptions};
+use vesselmsr::inpaint::repair::{region_margin, repair, InpaintMethod, Repair, RepairOptions};
 use vesselmsr::mesh::info::mesh_info;
 use vesselmsr::mesh::topology::connected_components;
 use vesselmsr::report::stenosis::volume_in_ball;
@@ -162,6 +162,49 @@ fn every_method_gives_a_closed_outward_vessel() {
         let damaged = volume_error_in(&tube.damaged, &tube.truth, &tube.regions);
         if method != InpaintMethod::Paper {
             assert!(ve > damaged, "{method}: {ve} vs damaged {damaged}");
+        }
+    }
+}
+
+#[test]
+fn a_growth_speed_given_alone_sizes_the_grid_for_the_growth_that_runs() {
+    // `-c` without `--time` sized the sub-box for c·(region radius)², not the c·T that runs
+    // (T = R²/2 for msr): c = 1 on the tube's region (6.6 = 2.2 R wide) asked for a box 359
+    // voxels wide, and on the stenosis phantom's region (3.6 R) for 149 GiB (refused). Now at
+    // most the region's radius is allowed before R is known, and the grids are sized again
+    // where the growth that runs needs more (c = 2: c·T = 8.3 > 6.6).
+    let tube = phantom(PhantomKind::Tube);
+    let rmax = tube.regions.iter().map(|b| b.radius).fold(0.0, f64::max);
+    for c in [1.0, 2.0] {
+        let opts = RepairOptions {
+            method: InpaintMethod::Msr,
+            speed: Some(c),
+            ..RepairOptions::default()
+        };
+        let out = repair(&tube.damaged, &tube.regions, &opts).unwrap();
+        let (h, t) = (out.voxel, out.time);
+        assert!(
+            (t - 0.5 * out.radius_estimate.powi(2)).abs() < 1e-9 * t,
+            "T = {t}"
+        );
+        let exact = RepairOptions {
+            time: Some(t),
+            ..opts.clone()
+        };
+        // The box around the ball holds the growth c·T that ran, and not much more.
+        let need = 2.0 * (rmax + region_margin(&exact, &tube.regions, h));
+        let most = need + 2.0 * (rmax - c * t).max(0.0);
+        let extent = out.grid_dims.map(|n| (n - 1) as f64 * h);
+        println!(
+            "c = {c}: c·T = {:.2}, box {extent:.1?}, need {need:.1}",
+            c * t
+        );
+        assert!(mesh_info(&out.mesh).watertight, "c = {c}");
+        for e in extent {
+            assert!(
+                e >= need - 2.0 * h && e <= most + 3.0 * h,
+                "c = {c}: {e} vs {need}..{most}"
+            );
         }
     }
 }

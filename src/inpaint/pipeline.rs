@@ -269,6 +269,7 @@ pub fn repair_vessel(
     // The narrowings' regions hold an intact lumen: the fill may follow their centreline.
     let opts = &RepairOptions {
         intact_lumen: sources.iter().map(|s| is_stenosis_source(s)).collect(),
+        max_memory: Some(request.max_memory),
         ..request.options.clone()
     };
     repair_budget::check(mesh, &balls, opts, request.max_memory).map_err(|e| e.context(name))?;

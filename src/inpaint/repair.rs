@@ -158,6 +158,11 @@ pub struct RepairOptions {
     /// and the `centerline` fill may follow it where it winds; missing entries: not intact
     /// (a hole's or a chop's centreline runs through a cap or a gap). Default empty.
     pub intact_lumen: Vec<bool>,
+    /// The memory budget (bytes) the grids are checked against again when they must be sized
+    /// a second time (c given without T: the margin for the growth c·T is known only once R
+    /// is; see [`region_margin`]). `None`: not checked (the caller checked
+    /// [`super::repair_budget::check`] once, as the pipeline does before the first sizing).
+    pub max_memory: Option<u64>,
 }
 
 impl Default for RepairOptions {
@@ -176,6 +181,7 @@ impl Default for RepairOptions {
             tolerance_voxels: 0.1,
             blend_voxels: 2.0,
             intact_lumen: Vec::new(),
+            max_memory: None,
         }
     }
 }
@@ -262,15 +268,28 @@ const STITCH_MARGINS_VOXELS: [f64; 8] = [1.5, 1.0, 0.75, 2.5, 3.5, 0.5, 0.25, 0.
 
 /// The sub-box's margin beyond the balls, world units, at voxel `h`: a few voxels, and for the
 /// fills that grow the shape (msr, paper, flow), which move it by up to c·T, room for that too
-/// (R is not known yet; the largest region's radius bounds it from above in practice).
+/// ([`growth_allowance`]).
 pub fn region_margin(opts: &RepairOptions, balls: &[Ball], h: f64) -> f64 {
     let rmax = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
     match opts.method {
         InpaintMethod::Axial | InpaintMethod::Centerline => MARGIN_VOXELS * h,
-        _ => {
-            let growth = opts.speed.unwrap_or(1.0 / rmax) * opts.time.unwrap_or(rmax * rmax);
-            0.5 * rmax + MARGIN_VOXELS * h + growth
-        }
+        _ => 0.5 * rmax + MARGIN_VOXELS * h + growth_allowance(opts, rmax),
+    }
+}
+
+/// The growth c·T the margin of the shape-growing fills leaves room for, sized before the
+/// vessel radius R is known (`rmax`: the largest region's radius, about R or more): c·T when
+/// both are given; T/rmax for T alone (c = 1/R by default); rmax for neither (the defaults'
+/// c·T is at most R); for c alone (T = R² or R²/2 by default) c·rmax², but at most rmax: on a
+/// region several radii wide, c·rmax² sized the grids for the region's radius where the
+/// vessel's is meant (a narrowing's region 3.6 R wide with c = 2.4/R: a 149 GiB estimate,
+/// refused). Where the c·T that runs is more than this, the repair sizes its grids again for it.
+fn growth_allowance(opts: &RepairOptions, rmax: f64) -> f64 {
+    match (opts.speed, opts.time) {
+        (Some(c), Some(t)) => c * t,
+        (None, Some(t)) => t / rmax,
+        (None, None) => rmax,
+        (Some(c), None) => (c * rmax * rmax).min(rmax),
     }
 }
 
@@ -449,6 +468,27 @@ pub fn repair_with_centerline(
     let epsilon = opts
         .epsilon
         .unwrap_or(0.125 * radius_estimate * radius_estimate);
+    let grows = !matches!(
+        opts.method,
+        InpaintMethod::Axial | InpaintMethod::Centerline
+    );
+    if grows && speed * time > growth_allowance(opts, rmax) * (1.0 + 1e-9) {
+        // The growth that runs needs a larger sub-box than the one sized before R was known
+        // (c given without T): sized again for it, within the memory budget, with the c, T
+        // and ε of this R (the larger box's shell would estimate R a little differently).
+        let exact = RepairOptions {
+            speed: Some(speed),
+            time: Some(time),
+            epsilon: Some(epsilon),
+            ..opts.clone()
+        };
+        if let Some(max) = opts.max_memory {
+            super::repair_budget::check(mesh, balls, &exact, max)?;
+        }
+        let mut resized = repair_with_centerline(mesh, balls, &exact, healthy)?;
+        resized.radius_estimate = radius_estimate;
+        return Ok(resized);
+    }
     let fill_opts = MsrFillOptions {
         speed,
         time,
