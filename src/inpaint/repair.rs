@@ -268,7 +268,7 @@ const STITCH_MARGINS_VOXELS: [f64; 8] = [1.5, 1.0, 0.75, 2.5, 3.5, 0.5, 0.25, 0.
 
 /// The sub-box's margin beyond the balls, world units, at voxel `h`: a few voxels, and for the
 /// fills that grow the shape (msr, paper, flow), which move it by up to c·T, room for that too
-/// ([`growth_allowance`]).
+/// (`growth_allowance`).
 pub fn region_margin(opts: &RepairOptions, balls: &[Ball], h: f64) -> f64 {
     let rmax = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
     match opts.method {
