@@ -200,7 +200,9 @@ fn a_region_that_grazes_the_other_iliac_is_still_stitched() {
 /// biharmonic fill carried the readings' slope on past the last of them and swelled one
 /// iliac's section to 2.3 times its radius: a bulge 2 mm above the aorta's top wall (8.2h in the
 /// benchmark's measure). Filled details are now held to 0.8 radii outward (`MAX_FILLED_BULGE`),
-/// and the union of tubes has its bumps shaved (`inpaint::shave`).
+/// and the union of tubes has its bumps shaved (`inpaint::shave`); a junction branch's chart
+/// is held taut beyond a radius (`guided::JUNCTION_CHART_TENSION`), so that the slope past the
+/// last reading is not carried on.
 #[test]
 fn a_junction_fill_does_not_bulge_over_the_aortas_top_wall() {
     let dir = tempfile::tempdir().unwrap();
@@ -211,10 +213,11 @@ fn a_junction_fill_does_not_bulge_over_the_aortas_top_wall() {
         dir.path(),
     );
     assert_eq!(report["regions"][0]["fill"], "junction", "{report}");
-    // 4.82h and +3.9% measured; 6.26h and +4.8% unshaved, 8.24h and +6.1% unbounded too.
-    // Still beyond issue 21's 3h: the junction's shape is modelled, not measured.
-    assert!(hd <= 5.5, "{hd}h");
-    assert!(ve.abs() <= 0.045, "{ve}");
+    // 4.25h and +2.9% measured; 4.82h and +3.9% with a thin-plate chart, 6.26h and +4.8%
+    // unshaved too, 8.24h and +6.1% unbounded too. Still beyond issue 21's 3h: the
+    // junction's shape is modelled, not measured.
+    assert!(hd <= 4.75, "{hd}h");
+    assert!(ve.abs() <= 0.035, "{ve}");
 }
 
 #[test]

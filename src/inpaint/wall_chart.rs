@@ -15,7 +15,11 @@
 //! (the coronary's bend). The paper inpaints its multiscale details across D with a diffusion
 //! (eq. 4.1, viscosity ε); this is the smoothest fill of that kind on the vessel's own chart.
 //!
-//! Solver: the normal equations (P L L P) x = −P L L u₀ on the unknown cells (L the chart's
+//! A junction's branch uses a tension τ (`fill_with_tension`, `guided::JUNCTION_CHART_TENSION`):
+//! Σ (L u)² + τ Σ |∇u|², a thin plate over short lengths and a membrane over long ones, so that
+//! past the last reading, towards the junction point, the wall's slope is not carried on.
+//!
+//! Solver: the normal equations (P L L P + τ P (−L) P) x = −P L L u₀ + τ P L u₀ on the unknown cells (L the chart's
 //! Laplacian, symmetric; P the selection of unknown cells), symmetric positive definite when a
 //! cell is known, banded in sample-major order (a cell couples to cells at most two rows away:
 //! bandwidth 2 × rays), solved by banded Cholesky: O(unknowns × rays²), a few milliseconds for
@@ -53,6 +57,19 @@ fn stencil(i: usize, j: usize, arc: &[f64], spacing: &[f64], m: usize) -> Vec<(u
 /// Replaces the unknown cells of `values` (`known[c]` false) by the biharmonic interpolation of
 /// the known ones (see the module docs). Nothing changes when every cell or no cell is known.
 pub fn fill_biharmonic(values: &mut [f64], known: &[bool], arc: &[f64], spacing: &[f64], m: usize) {
+    fill_with_tension(values, known, arc, spacing, m, 0.0)
+}
+
+/// [`fill_biharmonic`] with a tension τ (1/world length²): minimises Σ (L u)² + τ Σ |∇u|²,
+/// a thin plate for features shorter than 1/√τ and a membrane for longer ones.
+pub fn fill_with_tension(
+    values: &mut [f64],
+    known: &[bool],
+    arc: &[f64],
+    spacing: &[f64],
+    m: usize,
+    tension: f64,
+) {
     let n = arc.len();
     if n < 2 || m == 0 || values.len() != n * m || known.len() != n * m {
         return;
@@ -114,6 +131,18 @@ pub fn fill_biharmonic(values: &mut [f64], known: &[bool], arc: &[f64], spacing:
             for &(q, wq) in l {
                 if q <= p {
                     a[p * w1 + (p - q)] += wp * wq;
+                }
+            }
+        }
+    }
+    // The membrane part: τ (−L) on the unknown cells, τ (L u₀) on the right-hand side.
+    if tension > 0.0 {
+        for (p, &c) in cells.iter().enumerate() {
+            for (e, w) in stencil(c / m, c % m, arc, spacing, m) {
+                if known[e] {
+                    rhs[p] += tension * w * values[e];
+                } else if slot[e] <= p {
+                    a[p * w1 + (p - slot[e])] -= tension * w;
                 }
             }
         }
@@ -243,6 +272,41 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn tension_holds_a_slope_back_past_the_last_reading_as_a_membrane_would() {
+        // u = s along the tube, every angle; the last 20 samples (2 units, towards a junction
+        // point) unknown. The thin plate carries the slope on (to 4.9 at the end, where the
+        // chart's one-sided Laplacian levels it off; u = s would be 5.9); a membrane with no
+        // flux through the end stays at the last reading (3.9); a tension τ = 1 lies between,
+        // and a very large one is the membrane.
+        let (n, m) = (60, 24);
+        let arc: Vec<f64> = (0..n).map(|i| 0.1 * i as f64).collect();
+        let spacing = vec![0.3; n];
+        let known: Vec<bool> = (0..n * m).map(|c| c / m < 40).collect();
+        let u0: Vec<f64> = (0..n * m)
+            .map(|c| if known[c] { arc[c / m] } else { 0.0 })
+            .collect();
+        let end = |tension: f64| {
+            let mut u = u0.clone();
+            fill_with_tension(&mut u, &known, &arc, &spacing, m, tension);
+            u[(n - 1) * m]
+        };
+        let (plate, taut, membrane) = (end(0.0), end(1.0), end(1e6));
+        println!("end value: thin plate {plate}, tension 1 {taut}, membrane {membrane}");
+        assert!((plate - 4.9).abs() < 1e-6, "thin plate {plate}");
+        assert!((membrane - 3.9).abs() < 1e-3, "membrane {membrane}");
+        assert!(
+            taut > membrane + 0.1 && taut < plate - 0.1,
+            "tension 1: {taut}"
+        );
+        // No tension is the thin plate, to the bit.
+        let mut a = u0.clone();
+        let mut b = u0.clone();
+        fill_biharmonic(&mut a, &known, &arc, &spacing, m);
+        fill_with_tension(&mut b, &known, &arc, &spacing, m, 0.0);
+        assert_eq!(a, b);
     }
 
     #[test]
