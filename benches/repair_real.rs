@@ -151,7 +151,18 @@
 //! on 75. Seeds 24–27: 1.04, 1.57, 1.51, 1.64h; 49 and 80 of 100 (46 and 79 before); MeshLib
 //! beaten on 89 of 100 (24, 21, 21, 23; 87 before: the carotid's two narrowings are now won),
 //! pymeshfix and pymeshlab on 97; MeshLib closer on 9 of the 16 junction chops of 24–27 and on
-//! the coronary's chop#1 of seed 24.
+//! the coronary's chop#1 of seed 24. Seed 21's median moved with its new narrowings (the
+//! capped aorta's 0.81h → 1.77h at its new site): 1.54h / 1.4%, above 1.5h.
+//!
+//! Re-measured the same evening (load 1.3–3.0) after a junction branch's wall chart was held
+//! taut beyond a radius (`guided::JUNCTION_CHART_TENSION`): seed 21 1.54h / 1.4%, 11 and 22 of
+//! 25 (the aneurysm's junction chop 2.80h → 3.18h), MeshLib beaten on 24; seeds 21–23: 1.19h /
+//! 1.4%, 40 and 64 of 75; the 14 junction fills median 3.35h → 3.09h, 8 beyond 3h as before;
+//! MeshLib beaten on 72 of 75, pymeshfix on 74, pymeshlab on 75. Seeds 24–27: 1.04, 1.57, 1.51,
+//! 1.64h; 49 and 82 of 100; MeshLib beaten on 92 of 100 (24, 21, 24, 23), pymeshfix and
+//! pymeshlab on 99; MeshLib still closer on 7 of the 16 junction chops of 24–27. Our whole
+//! command on a chop: median 0.57 s (0.39–1.49 s) over the 45 of seeds 21–23, 56× MeshLib's
+//! filler call, 1.31× its whole run; seed 21's 25 cases 0.39–1.10 s.
 //! Seed 21 per case:
 //!
 //! | vessel | case | ours h / vol | ours s | MeshLib | pymeshfix | pymeshlab |
