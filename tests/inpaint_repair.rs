@@ -169,8 +169,9 @@ fn every_method_gives_a_closed_outward_vessel() {
 #[test]
 fn a_growth_speed_given_alone_sizes_the_grid_for_the_growth_that_runs() {
     // `-c` without `--time` sized the sub-box for c·(region radius)², not the c·T that runs
-    // (T = R²/2 for msr): c = 1 on the tube's region (6.6 = 2.2 R wide) asked for a box 359
-    // voxels wide, and on the stenosis phantom's region (3.6 R) for 149 GiB (refused). Now at
+    // (T = R²/2 for msr): c = 1 on the tube's region (radius 6.6, 2.2 R) gave a growth margin of
+    // 43.6 (a box about 110 units wide, against 37 now), and on the stenosis phantom's region
+    // (3.6 R) `paper -c 0.712` was refused for 149 GiB. Now at
     // most the region's radius is allowed before R is known, and the grids are sized again
     // where the growth that runs needs more (c = 2: c·T = 8.3 > 6.6).
     let tube = phantom(PhantomKind::Tube);

@@ -19,8 +19,9 @@
 //! Σ (L u)² + τ Σ |∇u|², a thin plate over short lengths and a membrane over long ones, so that
 //! past the last reading, towards the junction point, the wall's slope is not carried on.
 //!
-//! Solver: the normal equations (P L L P + τ P (−L) P) x = −P L L u₀ + τ P L u₀ on the unknown cells (L the chart's
-//! Laplacian, symmetric; P the selection of unknown cells), symmetric positive definite when a
+//! Solver: the normal equations (P L L P + τ P (−L) P) x = −P L L u₀ + τ P L u₀ on the unknown
+//! cells (L the chart's Laplacian, symmetric and negative semidefinite; P the selection of
+//! unknown cells), symmetric positive definite when a
 //! cell is known, banded in sample-major order (a cell couples to cells at most two rows away:
 //! bandwidth 2 × rays), solved by banded Cholesky: O(unknowns × rays²), a few milliseconds for
 //! a hole's few thousand cells, where conjugate gradients needed thousands of iterations.
