@@ -135,7 +135,7 @@
 //! 0.49 s (0.35–1.23 s), 59× MeshLib's filler call, 1.24× its whole run. The table below is
 //! the late-morning run's.
 //!
-//! Re-measured 2026-12-05 (sixth session's successor, load 1.7–2.3) after the stenosis sites
+//! Re-measured 2026-12-05 (night, load 1.7–2.3) after the stenosis sites
 //! were required to be level ([`UNIFORM`]): before, a site could lie on a narrowing or a bulge
 //! of the vessel's own, and "50% of its radius" was not 50% of the healthy lumen (the carotid's
 //! sites of seeds 25 and 26 fell on its external carotid's origin, 36% narrower than the artery
@@ -154,7 +154,7 @@
 //! the coronary's chop#1 of seed 24. Seed 21's median moved with its new narrowings (the
 //! capped aorta's 0.81h → 1.77h at its new site): 1.54h / 1.4%, above 1.5h.
 //!
-//! Re-measured the same evening (load 1.3–3.0) after a junction branch's wall chart was held
+//! Re-measured the same night (load 1.3–3.0) after a junction branch's wall chart was held
 //! taut beyond a radius (`guided::JUNCTION_CHART_TENSION`): seed 21 1.54h / 1.4%, 11 and 22 of
 //! 25 (the aneurysm's junction chop 2.80h → 3.18h), MeshLib beaten on 24; seeds 21–23: 1.19h /
 //! 1.4%, 40 and 64 of 75; the 14 junction fills median 3.35h → 3.09h, 8 beyond 3h as before;
@@ -162,7 +162,9 @@
 //! 1.64h; 49 and 82 of 100; MeshLib beaten on 92 of 100 (24, 21, 24, 23), pymeshfix and
 //! pymeshlab on 99; MeshLib still closer on 7 of the 16 junction chops of 24–27. Our whole
 //! command on a chop: median 0.57 s (0.39–1.49 s) over the 45 of seeds 21–23, 56× MeshLib's
-//! filler call, 1.31× its whole run; seed 21's 25 cases 0.39–1.10 s.
+//! filler call, 1.31× its whole run; seed 21's chops 0.39–1.10 s, its 25 cases 0.39–1.25 s (21
+//! under 1 s; the machine then ran about 1.6× slower than earlier that day: the same chop's
+//! unchanged centreline phase 0.35 s against 0.21 s).
 //! Seed 21 per case:
 //!
 //! | vessel | case | ours h / vol | ours s | MeshLib | pymeshfix | pymeshlab |
