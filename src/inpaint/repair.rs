@@ -89,6 +89,15 @@ impl InpaintMethod {
         InpaintMethod::Paper,
     ];
 
+    /// Whether the method runs a curvature motion on φ (flow, msr, paper): it may grow the shape
+    /// by up to c·T, evolves the whole sub-box, and works at its own default voxel.
+    pub fn is_motion(self) -> bool {
+        matches!(
+            self,
+            InpaintMethod::Flow | InpaintMethod::Msr | InpaintMethod::Paper
+        )
+    }
+
     /// The name used on the command line.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -271,9 +280,10 @@ const STITCH_MARGINS_VOXELS: [f64; 8] = [1.5, 1.0, 0.75, 2.5, 3.5, 0.5, 0.25, 0.
 /// (`growth_allowance`).
 pub fn region_margin(opts: &RepairOptions, balls: &[Ball], h: f64) -> f64 {
     let rmax = balls.iter().map(|b| b.radius).fold(0.0, f64::max);
-    match opts.method {
-        InpaintMethod::Axial | InpaintMethod::Centerline => MARGIN_VOXELS * h,
-        _ => 0.5 * rmax + MARGIN_VOXELS * h + growth_allowance(opts, rmax),
+    if opts.method.is_motion() {
+        0.5 * rmax + MARGIN_VOXELS * h + growth_allowance(opts, rmax)
+    } else {
+        MARGIN_VOXELS * h
     }
 }
 
@@ -369,11 +379,9 @@ pub fn repair_with_centerline(
             // h⁻² on a grid that grows as h⁻³: they work at MOTION_VOXELS_PER_RADIUS voxels
             // across the vessel's radius, the resolution their figures are measured at
             // (benches/inpaint), unless the rule is coarser.
-            let motion = matches!(
-                opts.method,
-                InpaintMethod::Flow | InpaintMethod::Msr | InpaintMethod::Paper
-            );
-            match motion
+            match opts
+                .method
+                .is_motion()
                 .then(|| typical_vessel_radius(&closed_input))
                 .flatten()
             {
@@ -468,11 +476,7 @@ pub fn repair_with_centerline(
     let epsilon = opts
         .epsilon
         .unwrap_or(0.125 * radius_estimate * radius_estimate);
-    let grows = !matches!(
-        opts.method,
-        InpaintMethod::Axial | InpaintMethod::Centerline
-    );
-    if grows && speed * time > growth_allowance(opts, rmax) * (1.0 + 1e-9) {
+    if opts.method.is_motion() && speed * time > growth_allowance(opts, rmax) * (1.0 + 1e-9) {
         // The growth that runs needs a larger sub-box than the one sized before R was known
         // (c given without T): sized again for it, within the memory budget, with the c, T
         // and ε of this R (the larger box's shell would estimate R a little differently).
@@ -656,10 +660,7 @@ pub fn repair_with_centerline(
     remove_islands(&mut psi, &unknown);
     // Marching cubes needs distances near the surface only. The axial and centreline fills
     // give distances, which are already that; the flows' and msr's fields are redistanced first.
-    if !matches!(
-        opts.method,
-        InpaintMethod::Axial | InpaintMethod::Centerline
-    ) {
+    if opts.method.is_motion() {
         redistance(
             &mut psi,
             &RedistanceOptions {
