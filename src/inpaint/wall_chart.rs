@@ -126,7 +126,7 @@ pub fn fill_with_tension(
     let w1 = band_width + 1;
     let mut a = vec![0.0; count * w1];
     let mut rhs = vec![0.0; count];
-    for (l, known_part) in &entries {
+    for (&e, (l, known_part)) in rows.iter().zip(&entries) {
         for &(p, wp) in l {
             rhs[p] -= wp * known_part;
             for &(q, wq) in l {
@@ -135,15 +135,14 @@ pub fn fill_with_tension(
                 }
             }
         }
-    }
-    // The membrane part: τ (−L) on the unknown cells, τ (L u₀) on the right-hand side.
-    if tension > 0.0 {
-        for (p, &c) in cells.iter().enumerate() {
-            for (e, w) in stencil(c / m, c % m, arc, spacing, m) {
-                if known[e] {
-                    rhs[p] += tension * w * values[e];
-                } else if slot[e] <= p {
-                    a[p * w1 + (p - slot[e])] -= tension * w;
+        // The membrane part, on the rows of unknown cells: τ (−L) on the matrix, τ (L u₀) on
+        // the right-hand side (the row's known part).
+        if tension > 0.0 && !known[e] {
+            let p = slot[e];
+            rhs[p] += tension * known_part;
+            for &(q, wq) in l {
+                if q <= p {
+                    a[p * w1 + (p - q)] -= tension * wq;
                 }
             }
         }
