@@ -257,7 +257,8 @@
 //! held-out draws of seeds 22 and 23, each with its summary, and the summary of all 75 cases
 //! (`-- --seed N` runs one draw; `-- SUBSTRING` runs the vessels whose file name holds it;
 //! `-- --keep DIR` keeps every case's files in DIR/seedN/VESSEL/CASE, our pictures included;
-//! $VESSELMSR_BENCH_PAPER=1 adds `--method paper`).
+//! `-- --end-bites` replaces each vessel's cases by chops that reach an open end's rim, a study
+//! outside the acceptance's cases; $VESSELMSR_BENCH_PAPER=1 adds `--method paper`).
 
 mod common;
 
@@ -568,6 +569,43 @@ fn chop_points(v: &Vessel, rng: &mut SplitMix) -> Vec<(Point3<f64>, f64, String)
     found
 }
 
+/// With `--end-bites`, instead of the draw's cases: wall points whose chop reaches an open end's
+/// rim (its nearest rim vertex between half and 1.2 local radii away, so the chop of
+/// [`CHOP`] radii bites 0.3 to 1 radius into the end), up to [`CHOPS`] per vessel, apart as the
+/// wall chops. A study of damage at a segmentation's cut end, outside the acceptance's cases.
+fn end_bite_points(v: &Vessel, rng: &mut SplitMix) -> Vec<(Point3<f64>, f64, String)> {
+    let rims: Vec<Point3<f64>> = boundary_loops(&v.mesh)
+        .iter()
+        .flatten()
+        .map(|&i| v.mesh.vertices[i as usize])
+        .collect();
+    let mut found: Vec<(Point3<f64>, f64, String)> = Vec::new();
+    if rims.is_empty() {
+        return found;
+    }
+    let sampler = AreaSampler::new(&v.mesh);
+    for _ in 0..DRAWS {
+        if found.len() == CHOPS {
+            break;
+        }
+        let p = sampler.draw(&v.mesh, rng);
+        let Some(r) = local_vessel_radius(&v.mesh, &v.bvh, &p) else {
+            continue;
+        };
+        let d = rims
+            .iter()
+            .map(|q| (q - p).norm())
+            .fold(f64::INFINITY, f64::min);
+        let apart = found
+            .iter()
+            .all(|(q, rq, _)| (q - p).norm() >= 2.0 * (r + rq));
+        if (0.5 * r..=1.2 * r).contains(&d) && apart {
+            found.push((p, r, "end".into()));
+        }
+    }
+    found
+}
+
 /// Centreline points for a stenosis or occlusion: `window` radii of branch on both sides whose
 /// inscribed radius stays within [R·HEALTHY, R/HEALTHY], more than `clearance` radii from
 /// every junction and endpoint; with `uniform` (radii), the site's radius within [`UNIFORM`]
@@ -803,9 +841,19 @@ fn occlusion_case(v: &Vessel, site: &Site) -> Case {
 }
 
 /// The five cases of a vessel (fewer when no place fits), printing where each lies.
-fn cases(v: &Vessel, index: u64, seed: u64) -> Vec<Case> {
+fn cases(v: &Vessel, index: u64, seed: u64, end_bites: bool) -> Vec<Case> {
     let mut out = Vec::new();
     let mut rng = SplitMix(seed ^ (index << 32));
+    if end_bites {
+        let bites = end_bite_points(v, &mut rng);
+        if bites.is_empty() {
+            println!("  no open end: no end bite");
+        }
+        for (n, (p, r, tag)) in bites.into_iter().enumerate() {
+            out.push(chop_case(v, n + 1, p, r, &tag));
+        }
+        return out;
+    }
     let chops = chop_points(v, &mut rng);
     if chops.len() < CHOPS {
         println!("  only {} wall point(s) away from the ends", chops.len());
@@ -1533,6 +1581,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let mut only = Vec::new();
     let mut keep: Option<PathBuf> = None;
+    let mut end_bites = false;
     let mut seeds = vec![SEED];
     seeds.extend(HELD_OUT);
     while let Some(a) = args.next() {
@@ -1548,6 +1597,8 @@ fn main() {
             keep = args.next().map(PathBuf::from);
         } else if let Some(dir) = a.strip_prefix("--keep=") {
             keep = Some(PathBuf::from(dir));
+        } else if a == "--end-bites" {
+            end_bites = true;
         } else if !a.starts_with("--") {
             only.push(a);
         }
@@ -1607,7 +1658,7 @@ fn main() {
                 cl.map_or(0, |c| c.junctions.len()),
             );
             let mut results = Vec::new();
-            for case in cases(vessel, *index, seed) {
+            for case in cases(vessel, *index, seed, end_bites) {
                 let c = case.region.center;
                 println!(
                     "  {}: R = {}, D = ball ({}, {}, {}) radius {}; {}",

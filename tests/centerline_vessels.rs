@@ -160,6 +160,23 @@ fn real_vessels_graphs() {
                 "{name}: open end at {:?} is {hit} from an endpoint",
                 l.center
             );
+            // Its radius is the loop's (it was the inscribed radius at the loop's centre: 0).
+            let e = cl
+                .endpoints
+                .iter()
+                .filter(|e| e.open_end)
+                .min_by(|a, b| {
+                    (a.position - l.center)
+                        .norm()
+                        .total_cmp(&(b.position - l.center).norm())
+                })
+                .unwrap();
+            assert!(
+                (e.radius - l.radius).abs() <= 1e-9 * l.radius,
+                "{name}: open end radius {} against the loop's {}",
+                e.radius,
+                l.radius
+            );
         }
         assert_eq!(
             cl.endpoints.iter().filter(|e| e.open_end).count(),

@@ -195,6 +195,9 @@ pub fn compute_centerline(
                 } else {
                     (*curve.points.last().unwrap(), *curve.radius.last().unwrap())
                 };
+                // An open end's radius is its loop's (the curve's ends there sit on the fan
+                // that closes the loop, whose centre is on the surface).
+                let r = b.open_ends[side].map_or(r, |e| ends[e].1);
                 match b.ends[side] {
                     EndKind::Junction => {
                         let j = *junction_of.entry(node).or_insert_with(|| {

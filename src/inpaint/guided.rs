@@ -34,8 +34,13 @@
 //!    smooth minimum of a quarter radius (the fillet of a carina); a single one beside a
 //!    vessel that crosses D is a side branch, continued to that vessel's curve where its axis
 //!    meets it and joined the same way; a single one alone is bridged to the branch's open
-//!    vessel end (the centre of a cut across the vessel, outside the damage) and cut flat there,
-//!    or, where the branch ends closed, continued along its own damaged centreline and capped
+//!    vessel end (the centre of a cut across the vessel, outside the damage) and cut flat there;
+//!    else to an open end inside E that the damaged centreline, broken into spurs by a cap
+//!    across most of the wall, does not reach (`open_end_in`); else, where the hole has bitten
+//!    into the vessel's cut end (an open end or a flat cap the damage reached, so that the
+//!    hole's rim runs partly along the cut), to that cut's plane, found as the plane holding a
+//!    share of the rim's points exactly (`bitten_end`: segmentations are clipped by planes); or,
+//!    where the branch ends closed, continued along its own damaged centreline and capped
 //!    round.
 //! 3. **Sections.** Along a curve, a rotation-minimising frame (double reflection, Wang, Jüttler,
 //!    Zheng and Liu 2008) is carried from the first anchor; the section at arc-length fraction w
@@ -91,6 +96,8 @@ pub struct HoleCaps {
     pub faces: Range<usize>,
     /// Per ball: whether a hole's rim lies in it (missing entries: no).
     pub in_ball: Vec<bool>,
+    /// The vertices of the holes' rims (each once).
+    pub rim: Vec<Point3<f64>>,
 }
 
 /// Options of [`plan_guides`]. Lengths in voxels where the field says so.
@@ -360,7 +367,15 @@ pub fn plan_guides(
                 .iter()
                 .any(|&i| holes.in_ball.get(i).copied().unwrap_or(false)))
         .then(|| holes.faces.clone());
-        if let Some((tubes, kinds)) = plan_group(mesh_bvh, centerline, &gb, follow, cap, h, opts) {
+        let rim: Vec<Point3<f64>> = holes
+            .rim
+            .iter()
+            .filter(|p| gb.iter().any(|b| b.contains(p)))
+            .copied()
+            .collect();
+        if let Some((tubes, kinds)) =
+            plan_group(mesh_bvh, centerline, &gb, follow, cap, &rim, h, opts)
+        {
             let fillet = 0.25
                 * tubes
                     .iter()
@@ -383,6 +398,7 @@ fn plan_group(
     balls: &[Ball],
     follow: bool,
     cap: Option<Range<usize>>,
+    rim: &[Point3<f64>],
     h: f64,
     opts: &GuideOptions,
 ) -> Option<(Vec<GuideTube>, Vec<GuideKind>)> {
@@ -660,6 +676,13 @@ fn plan_group(
                     index: 0,
                 })
             });
+            // An open vessel end inside E that the anchor's run does not reach: the hole's cap,
+            // across most of the vessel's wall, breaks the damaged centreline into spurs
+            // between them (a chop of two radii beside the aneurysm's open ICA end, its loop
+            // intact inside D). The vessel goes on to that end: the nearest one is taken.
+            let open_end = open_end
+                .or_else(|| open_end_in(centerline, &in_e, &st.anchor))
+                .or_else(|| bitten_end(rim, &st.anchor));
             match open_end {
                 Some(end) => tubes.push(make_tube(
                     &sections,
@@ -828,6 +851,142 @@ fn junction_tangent(a: &Anchor, j: &Point3<f64>, leave: &Vector3<f64>) -> Vector
 }
 
 /// Distance from `p` to the half-line from the anchor into D (to the anchor itself behind it).
+/// The open vessel end of `centerline` inside E (`in_e`) nearest to `from`, as the far anchor
+/// of a curve from `from`: at the end loop's centre, pointing into the vessel along its branch
+/// (over about `from`'s radius), with `from`'s radius; its section is not read (`clear` false).
+/// None when no open end lies in E.
+fn open_end_in(
+    centerline: &Centerline,
+    in_e: &dyn Fn(&Point3<f64>) -> bool,
+    from: &Anchor,
+) -> Option<Anchor> {
+    let end = centerline
+        .endpoints
+        .iter()
+        .filter(|e| e.open_end && in_e(&e.position))
+        .min_by(|a, b| {
+            (a.position - from.point)
+                .norm()
+                .total_cmp(&(b.position - from.point).norm())
+        })?;
+    let br = centerline.branches.get(end.branch)?;
+    let at_start = br
+        .points
+        .first()
+        .map_or(f64::INFINITY, |q| (q - end.position).norm())
+        <= br
+            .points
+            .last()
+            .map_or(f64::INFINITY, |q| (q - end.position).norm());
+    let mut along: Box<dyn Iterator<Item = &Point3<f64>>> = if at_start {
+        Box::new(br.points.iter())
+    } else {
+        Box::new(br.points.iter().rev())
+    };
+    let inner = along.find(|q| (*q - end.position).norm() >= from.radius)?;
+    Some(Anchor {
+        point: end.position,
+        into: (inner - end.position).try_normalize(1e-12)?,
+        radius: if end.radius > 0.0 {
+            end.radius
+        } else {
+            from.radius
+        },
+        clear: false,
+        branch: None,
+        index: 0,
+    })
+}
+
+/// Rim points within this fraction of the vessel's radius of a plane lie on it (a clipped
+/// segmentation's cut, or a flat cap, is planar to rounding).
+const BITTEN_PLANE_TOLERANCE: f64 = 1e-3;
+/// Least number of a hole's rim points on the plane of a bitten end (inside D the damage may
+/// have left only a short arc of the end's rim: an eighth of the rim on a tube bitten by a
+/// chop of its own radius).
+const BITTEN_MIN_POINTS: usize = 8;
+
+/// Where a hole has bitten into a vessel's cut end (an open end, or a flat cap, that the damage
+/// reached), the far anchor of the curve from `from`: the part of the end's rim the damage left
+/// lies in the cut's plane, and the vessel ends there. The plane is the one through three rim
+/// points (tried in a fixed order among the farthest along `from`'s direction) that holds the
+/// most of them within [`BITTEN_PLANE_TOLERANCE`] of the radius: at least
+/// [`BITTEN_MIN_POINTS`], spread over a radius or more, facing along the vessel (within 50°),
+/// with no rim point beyond it (the vessel's end). The anchor is where `from`'s axis meets the
+/// plane, pointing back into the vessel; its section is not read. None when no such plane is.
+fn bitten_end(rim: &[Point3<f64>], from: &Anchor) -> Option<Anchor> {
+    let n = rim.len();
+    if n < BITTEN_MIN_POINTS {
+        return None;
+    }
+    let t = from.into;
+    let tol = BITTEN_PLANE_TOLERANCE * from.radius;
+    // The end is beyond the anchor: candidates among the farthest third along the vessel.
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| {
+        (rim[b] - from.point)
+            .dot(&t)
+            .total_cmp(&(rim[a] - from.point).dot(&t))
+    });
+    let far = &order[..(n / 3).max(3)];
+    let m = far.len();
+    let mut best: Option<(usize, Vector3<f64>, Point3<f64>)> = None;
+    // A fixed sequence of triples (no randomness: the same input gives the same output).
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 33) as usize % m
+    };
+    for _ in 0..256 {
+        let (a, b, c) = (rim[far[next()]], rim[far[next()]], rim[far[next()]]);
+        let Some(normal) = (b - a).cross(&(c - a)).try_normalize(1e-12) else {
+            continue;
+        };
+        if normal.dot(&t).abs() < 50f64.to_radians().cos() {
+            continue;
+        }
+        // The end: no rim point beyond the plane, along the vessel.
+        let out = if normal.dot(&t) > 0.0 {
+            normal
+        } else {
+            -normal
+        };
+        if rim.iter().any(|p| (p - a).dot(&out) > tol) {
+            continue;
+        }
+        let on: Vec<&Point3<f64>> = rim
+            .iter()
+            .filter(|p| (*p - a).dot(&normal).abs() <= tol)
+            .collect();
+        let spread = on.iter().map(|p| (*p - a).norm()).fold(0.0, f64::max);
+        if spread >= from.radius && best.as_ref().map_or(true, |(k, _, _)| on.len() > *k) {
+            best = Some((on.len(), normal, a));
+        }
+    }
+    let (count, normal, on) = best?;
+    if count < BITTEN_MIN_POINTS {
+        return None;
+    }
+    let along = (on - from.point).dot(&normal) / t.dot(&normal);
+    if along <= 0.0 {
+        return None;
+    }
+    Some(Anchor {
+        point: from.point + t * along,
+        into: if normal.dot(&t) < 0.0 {
+            normal
+        } else {
+            -normal
+        },
+        radius: from.radius,
+        clear: false,
+        branch: None,
+        index: 0,
+    })
+}
+
 fn axis_distance(a: &Anchor, p: &Point3<f64>) -> f64 {
     let v = p - a.point;
     let along = v.dot(&a.into).max(0.0);
@@ -1893,6 +2052,95 @@ mod tests {
         assert!((x - 0.7).abs() < 1e-9 && (y + 0.3).abs() < 1e-9, "{x} {y}");
         // Collinear points have no circle.
         assert!(fit_circle(&[(0.0, 0.0), (1.0, 1.0), (2.0, 2.0)]).is_none());
+    }
+
+    /// An anchor at `p` looking along `into`, radius 1, read as clear.
+    fn looking(p: Point3<f64>, into: Vector3<f64>) -> Anchor {
+        Anchor {
+            point: p,
+            into,
+            radius: 1.0,
+            clear: true,
+            branch: None,
+            index: 0,
+        }
+    }
+
+    #[test]
+    fn a_bitten_end_is_found_on_the_plane_of_its_cut() {
+        // A tube of radius 1 along +z, cut at z = 5 by a plane tilted 20° about x, with a bite
+        // out of its rim: the rim left of the cut (the half of the section on the plane) and the
+        // bite's edge down the wall (a curve off any plane). The anchor is on the axis at z = 0.
+        let tilt = 20f64.to_radians();
+        let normal = Vector3::new(0.0, -tilt.sin(), tilt.cos());
+        let on_cut = |a: f64| {
+            let (x, y) = (a.cos(), a.sin());
+            // z on the plane through (0, 0, 5) with this normal.
+            Point3::new(x, y, 5.0 + y * tilt.sin() / tilt.cos())
+        };
+        let cut: Vec<Point3<f64>> = (0..=24).map(|k| on_cut(k as f64 * TAU / 48.0)).collect();
+        let bite: Vec<Point3<f64>> = (1..24)
+            .map(|k| {
+                let a = std::f64::consts::PI + k as f64 * TAU / 48.0;
+                let dip = 1.5 * (k as f64 * std::f64::consts::PI / 24.0).sin();
+                on_cut(a) - Vector3::new(0.0, 0.0, dip + 0.1 * (3.0 * a).cos())
+            })
+            .collect();
+        let rim: Vec<Point3<f64>> = cut.iter().chain(&bite).copied().collect();
+        let from = looking(Point3::origin(), Vector3::z());
+        let end = bitten_end(&rim, &from).expect("the cut's plane");
+        assert!(
+            (end.point - Point3::new(0.0, 0.0, 5.0)).norm() < 1e-9,
+            "{:?}",
+            end.point
+        );
+        assert!((end.into + normal).norm() < 1e-9, "{:?}", end.into);
+        assert!(!end.clear);
+        // The bite alone (no planar part of the rim left) is no cut end.
+        assert!(bitten_end(&bite, &from).is_none());
+        // Nor a cut behind the anchor, nor one along the vessel rather than across it.
+        assert!(bitten_end(&rim, &looking(Point3::new(0.0, 0.0, 9.0), Vector3::z())).is_none());
+        assert!(bitten_end(&rim, &looking(Point3::origin(), Vector3::x())).is_none());
+    }
+
+    #[test]
+    fn an_open_end_in_the_region_is_the_far_anchor() {
+        // One branch from an open end at the origin up the z axis; the region holds the end.
+        let points: Vec<Point3<f64>> = (0..=20)
+            .map(|k| Point3::new(0.0, 0.0, k as f64 * 0.5))
+            .collect();
+        let n = points.len();
+        let centerline = Centerline {
+            voxel: 0.5,
+            components: 1,
+            branches: vec![crate::centerline::Branch {
+                id: 0,
+                component: 0,
+                length: 10.0,
+                points,
+                radius: vec![1.0; n],
+                tangent: vec![Vector3::z(); n],
+                start: EndKind::OpenEnd,
+                end: EndKind::End,
+            }],
+            junctions: Vec::new(),
+            endpoints: vec![crate::centerline::Endpoint {
+                position: Point3::origin(),
+                radius: 1.5,
+                branch: 0,
+                open_end: true,
+            }],
+            notices: Vec::new(),
+        };
+        let from = looking(Point3::new(0.0, 0.0, 12.0), -Vector3::z());
+        let near = |p: &Point3<f64>| (p - Point3::new(0.0, 0.0, 2.0)).norm() < 4.0;
+        let end = open_end_in(&centerline, &near, &from).expect("the open end");
+        assert_eq!(end.point, Point3::origin());
+        // Pointing into the vessel, with the end loop's radius; its section is not read.
+        assert!((end.into - Vector3::z()).norm() < 1e-12, "{:?}", end.into);
+        assert_eq!((end.radius, end.clear), (1.5, false));
+        let far = |p: &Point3<f64>| (p - Point3::new(0.0, 0.0, 8.0)).norm() < 4.0;
+        assert!(open_end_in(&centerline, &far, &from).is_none());
     }
 
     #[test]

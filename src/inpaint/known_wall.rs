@@ -119,6 +119,15 @@ pub fn rim_balls(rim: &[(Point3<f64>, Point3<f64>)], balls: &[Ball]) -> Vec<bool
         .collect()
 }
 
+/// The end points of the segments of `rim`, each once (in the order first met).
+pub fn rim_points(rim: &[(Point3<f64>, Point3<f64>)]) -> Vec<Point3<f64>> {
+    let mut seen = std::collections::HashSet::new();
+    rim.iter()
+        .flat_map(|(a, b)| [*a, *b])
+        .filter(|p| seen.insert([p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]))
+        .collect()
+}
+
 /// The rims of the holes in `balls`: the edges that bound the cap triangles (used once by them),
 /// with an end inside a ball, as segments.
 pub fn hole_rims(
