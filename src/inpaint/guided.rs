@@ -912,8 +912,10 @@ const BITTEN_MIN_POINTS: usize = 8;
 /// points (tried in a fixed order among the farthest along `from`'s direction) that holds the
 /// most of them within [`BITTEN_PLANE_TOLERANCE`] of the radius: at least
 /// [`BITTEN_MIN_POINTS`], spread over a radius or more, facing along the vessel (within 50°),
-/// with no rim point beyond it (the vessel's end). The anchor is where `from`'s axis meets the
-/// plane, pointing back into the vessel; its section is not read. None when no such plane is.
+/// with no rim point beyond it (the vessel's end). The anchor is at the centre of the circle
+/// through the rim's points on the plane (with that circle's radius), or where `from`'s axis
+/// meets the plane when no circle of about `from`'s radius fits them, pointing back into the
+/// vessel; its section is not read. None when no such plane is.
 fn bitten_end(rim: &[Point3<f64>], from: &Anchor) -> Option<Anchor> {
     let n = rim.len();
     if n < BITTEN_MIN_POINTS {
@@ -973,14 +975,35 @@ fn bitten_end(rim: &[Point3<f64>], from: &Anchor) -> Option<Anchor> {
     if along <= 0.0 {
         return None;
     }
+    // The end's centre: the circle through the rim's arc on the plane (Kåsa), where it fits a
+    // vessel of about the anchor's size; else where the anchor's axis meets the plane (off the
+    // end's centre where the vessel bends before its end: the aneurysm's ICA).
+    let e1 = any_perpendicular(&normal);
+    let e2 = normal.cross(&e1);
+    let arc: Vec<&Point3<f64>> = rim
+        .iter()
+        .filter(|p| (*p - on).dot(&normal).abs() <= tol)
+        .collect();
+    let flat: Vec<(f64, f64)> = arc
+        .iter()
+        .map(|p| ((*p - on).dot(&e1), (*p - on).dot(&e2)))
+        .collect();
+    let fitted = fit_circle(&flat).and_then(|(x, y)| {
+        let c = on + e1 * x + e2 * y;
+        let r = arc.iter().map(|p| (*p - c).norm()).sum::<f64>() / arc.len() as f64;
+        (0.5 * from.radius..=2.0 * from.radius)
+            .contains(&r)
+            .then_some((c, r))
+    });
+    let (point, radius) = fitted.unwrap_or((from.point + t * along, from.radius));
     Some(Anchor {
-        point: from.point + t * along,
+        point,
         into: if normal.dot(&t) < 0.0 {
             normal
         } else {
             -normal
         },
-        radius: from.radius,
+        radius,
         clear: false,
         branch: None,
         index: 0,
@@ -2066,39 +2089,58 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_bitten_end_is_found_on_the_plane_of_its_cut() {
-        // A tube of radius 1 along +z, cut at z = 5 by a plane tilted 20° about x, with a bite
-        // out of its rim: the rim left of the cut (the half of the section on the plane) and the
-        // bite's edge down the wall (a curve off any plane). The anchor is on the axis at z = 0.
-        let tilt = 20f64.to_radians();
-        let normal = Vector3::new(0.0, -tilt.sin(), tilt.cos());
+    /// The rim a chop leaves where it bites the end of a tube of radius 1 along +z cut at z = 5
+    /// by a plane tilted `tilt` about x: the half of the end's section left on the plane, then
+    /// the bite's edge down the wall (a curve off any plane).
+    fn bitten_rim(tilt: f64) -> (Vec<Point3<f64>>, Vec<Point3<f64>>) {
         let on_cut = |a: f64| {
             let (x, y) = (a.cos(), a.sin());
-            // z on the plane through (0, 0, 5) with this normal.
-            Point3::new(x, y, 5.0 + y * tilt.sin() / tilt.cos())
+            Point3::new(x, y, 5.0 + y * tilt.tan())
         };
-        let cut: Vec<Point3<f64>> = (0..=24).map(|k| on_cut(k as f64 * TAU / 48.0)).collect();
-        let bite: Vec<Point3<f64>> = (1..24)
+        let cut = (0..=24).map(|k| on_cut(k as f64 * TAU / 48.0)).collect();
+        let bite = (1..24)
             .map(|k| {
                 let a = std::f64::consts::PI + k as f64 * TAU / 48.0;
                 let dip = 1.5 * (k as f64 * std::f64::consts::PI / 24.0).sin();
                 on_cut(a) - Vector3::new(0.0, 0.0, dip + 0.1 * (3.0 * a).cos())
             })
             .collect();
+        (cut, bite)
+    }
+
+    #[test]
+    fn a_bitten_end_is_found_on_the_plane_of_its_cut() {
+        let (cut, bite) = bitten_rim(0.0);
         let rim: Vec<Point3<f64>> = cut.iter().chain(&bite).copied().collect();
-        let from = looking(Point3::origin(), Vector3::z());
+        // An anchor off the end's axis (the vessel bends before its end): the end is the centre
+        // of the rim's circle on the cut, with its radius, pointing back down the vessel.
+        let from = looking(Point3::new(0.4, 0.0, 0.0), Vector3::z());
         let end = bitten_end(&rim, &from).expect("the cut's plane");
         assert!(
             (end.point - Point3::new(0.0, 0.0, 5.0)).norm() < 1e-9,
             "{:?}",
             end.point
         );
-        assert!((end.into + normal).norm() < 1e-9, "{:?}", end.into);
+        assert!((end.radius - 1.0).abs() < 1e-9, "{}", end.radius);
+        assert!((end.into + Vector3::z()).norm() < 1e-9, "{:?}", end.into);
         assert!(!end.clear);
-        // The bite alone (no planar part of the rim left) is no cut end.
+        // A cut tilted 20°: its plane exactly; the centre of the circle fitted to the half
+        // ellipse the tube leaves on it within a tenth of the radius of the tube's axis.
+        let tilt = 20f64.to_radians();
+        let (cut, bite) = bitten_rim(tilt);
+        let rim: Vec<Point3<f64>> = cut.iter().chain(&bite).copied().collect();
+        let end = bitten_end(&rim, &looking(Point3::origin(), Vector3::z())).expect("tilted");
+        let normal = Vector3::new(0.0, -tilt.sin(), tilt.cos());
+        assert!((end.into + normal).norm() < 1e-9, "{:?}", end.into);
+        assert!(
+            (end.point - Point3::new(0.0, 0.0, 5.0)).norm() < 0.1,
+            "{:?}",
+            end.point
+        );
+        // The bite alone (no planar part of the rim left) is no cut end; nor a cut behind the
+        // anchor, nor one along the vessel rather than across it.
+        let from = looking(Point3::origin(), Vector3::z());
         assert!(bitten_end(&bite, &from).is_none());
-        // Nor a cut behind the anchor, nor one along the vessel rather than across it.
         assert!(bitten_end(&rim, &looking(Point3::new(0.0, 0.0, 9.0), Vector3::z())).is_none());
         assert!(bitten_end(&rim, &looking(Point3::origin(), Vector3::x())).is_none());
     }
