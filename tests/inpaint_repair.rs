@@ -526,16 +526,14 @@ fn an_inward_input_is_turned_outward_and_repaired() {
     assert!(r.stitched, "{:?}", r.fallback);
 }
 
-#[test]
-fn a_hole_next_to_an_open_end_is_bridged_to_that_end() {
-    // A straight open tube (radius 3, ends cut at z = 0 and z = 40) with a wall chop whose region
-    // reaches the end at z = 0: on the centreline the vessel ends inside D, at an open end. The
-    // fill bridges the intact section beyond D to the end's centre and cuts it flat there (it
-    // once followed the damaged centreline, drawn off the hole, and closed round: the
-    // carotid's chop by its end was 2.2h / −16.5%, now 0.15h).
+/// A straight open tube (radius 3, ends cut at z = 0 and z = 40) chopped by a ball of radius 3
+/// at (3, 0, `z`), its region D 1.3 chops wide, repaired at voxel 0.25: the damaged mesh, the
+/// repair, and the repair's Hausdorff distance in D (voxels) and volume error in D against the
+/// tube with its ends capped flat.
+fn repair_tube_chopped_at(z: f64) -> (TriMesh, Repair, f64, f64) {
     let tube = vesselmsr::mesh::primitives::open_tube(3.0, 40.0, 96, 241);
     let chop = Ball {
-        center: Point3::new(3.0, 0.0, 4.0),
+        center: Point3::new(3.0, 0.0, z),
         radius: 3.0,
     };
     let damaged = common::punch_hole(&tube, chop.center, chop.radius);
@@ -549,17 +547,27 @@ fn a_hole_next_to_an_open_end_is_bridged_to_that_end() {
         ..RepairOptions::default()
     };
     let r = repair(&damaged, &d, &opts).unwrap();
+    assert!(mesh_info(&r.mesh).watertight);
+    let (truth, _) = vesselmsr::mesh::cap::cap_holes(&tube, &Default::default()).unwrap();
+    let hd = hausdorff_in(&r.mesh, &truth, &d) / h;
+    let ve = volume_error_in(&r.mesh, &truth, &d);
+    (damaged, r, hd, ve)
+}
+
+#[test]
+fn a_hole_next_to_an_open_end_is_bridged_to_that_end() {
+    // A wall chop whose region reaches the end at z = 0: on the centreline the vessel ends
+    // inside D, at an open end. The fill bridges the intact section beyond D to the end's
+    // centre and cuts it flat there (it once followed the damaged centreline, drawn off the
+    // hole, and closed round: the carotid's chop by its end was 2.2h / −16.5%, now 0.15h).
+    let (_, r, hd, ve) = repair_tube_chopped_at(4.0);
     assert!(
         r.guides
             .contains(&vesselmsr::inpaint::guided::GuideKind::DeadEnd),
         "{:?}",
         r.guides
     );
-    let (truth, _) = vesselmsr::mesh::cap::cap_holes(&tube, &Default::default()).unwrap();
-    let hd = hausdorff_in(&r.mesh, &truth, &d) / h;
-    let ve = volume_error_in(&r.mesh, &truth, &d);
     println!("hole by an open end: {hd:.2}h, {:+.2}% in D", 100.0 * ve);
-    assert!(mesh_info(&r.mesh).watertight);
     // Measured 0.16h / −0.44% (0.51h / −1.27% with a harmonic fill of the wall's offsets;
     // 1.28h / −3.06% with the biharmonic one while the rays of the flat end's own section, which
     // graze the end's rim, were read; following the damaged centreline: 0.87h / −3.20%).
@@ -569,40 +577,21 @@ fn a_hole_next_to_an_open_end_is_bridged_to_that_end() {
 
 #[test]
 fn a_hole_that_bites_into_an_open_end_is_cut_flat_on_that_end() {
-    // The open tube of the test above with its chop reaching the end's rim (centre 1 above the
-    // end at z = 0): the hole and the end are one loop, a hole, and the vessel ends inside D at
-    // no open end. The part of the end's rim the chop left lies in the end's plane: the fill is
-    // cut flat there, as the truth is capped, instead of closing round along the damaged
-    // centreline. Measured 1.73h / −0.14% (closed round: 7.47h / +18.5%).
-    let tube = vesselmsr::mesh::primitives::open_tube(3.0, 40.0, 96, 241);
-    let chop = Ball {
-        center: Point3::new(3.0, 0.0, 1.0),
-        radius: 3.0,
-    };
-    let damaged = common::punch_hole(&tube, chop.center, chop.radius);
+    // The chop now reaches the end's rim (centre 1 above the end at z = 0): the hole and the end
+    // are one loop, a hole, and the vessel ends inside D at no open end. The part of the end's
+    // rim the chop left lies in the end's plane: the fill is cut flat there, as the truth is
+    // capped, instead of closing round along the damaged centreline. Measured 1.73h / −0.14%
+    // (closed round: 7.47h / +18.5%).
+    let (damaged, _, hd, ve) = repair_tube_chopped_at(1.0);
     assert_eq!(
         mesh_info(&damaged).boundary_loops,
         2,
         "the bite joins the end's loop"
     );
-    let d = [Ball {
-        center: chop.center,
-        radius: 1.3 * chop.radius,
-    }];
-    let h = 0.25;
-    let opts = RepairOptions {
-        voxel: Some(h),
-        ..RepairOptions::default()
-    };
-    let r = repair(&damaged, &d, &opts).unwrap();
-    let (truth, _) = vesselmsr::mesh::cap::cap_holes(&tube, &Default::default()).unwrap();
-    let hd = hausdorff_in(&r.mesh, &truth, &d) / h;
-    let ve = volume_error_in(&r.mesh, &truth, &d);
     println!(
         "hole biting an open end: {hd:.2}h, {:+.2}% in D",
         100.0 * ve
     );
-    assert!(mesh_info(&r.mesh).watertight);
     assert!(hd <= 2.5, "{hd}h");
     assert!(ve.abs() <= 0.02, "{ve}");
 }
