@@ -844,7 +844,8 @@ fn occlusion_case(v: &Vessel, site: &Site) -> Case {
     }
 }
 
-/// The five cases of a vessel (fewer when no place fits), printing where each lies.
+/// The five cases of a vessel (fewer when no place fits), or with `end_bites` its end bites
+/// ([`end_bite_points`]), printing where each lies.
 fn cases(v: &Vessel, index: u64, seed: u64, end_bites: bool) -> Vec<Case> {
     let mut out = Vec::new();
     let mut rng = SplitMix(seed ^ (index << 32));

@@ -38,8 +38,9 @@
 //!    else to an open end inside E that the damaged centreline, broken into spurs by a cap
 //!    across most of the wall, does not reach (`open_end_in`); else, where the hole has bitten
 //!    into the vessel's cut end (an open end or a flat cap the damage reached, so that the
-//!    hole's rim runs partly along the cut), to that cut's plane, found as the plane holding a
-//!    share of the rim's points exactly (`bitten_end`: segmentations are clipped by planes); or,
+//!    hole's rim runs partly along the cut), to that cut's plane, found as the plane holding 8
+//!    or more of the rim's points to 10⁻³ of the radius (`bitten_end`: segmentations are
+//!    clipped by planes), at the centre of the circle through them; or,
 //!    where the branch ends closed, continued along its own damaged centreline and capped
 //!    round.
 //! 3. **Sections.** Along a curve, a rotation-minimising frame (double reflection, Wang, Jüttler,
@@ -676,10 +677,11 @@ fn plan_group(
                     index: 0,
                 })
             });
-            // An open vessel end inside E that the anchor's run does not reach: the hole's cap,
-            // across most of the vessel's wall, breaks the damaged centreline into spurs
+            // Else an open vessel end inside E that the anchor's run does not reach: the hole's
+            // cap, across most of the vessel's wall, breaks the damaged centreline into spurs
             // between them (a chop of two radii beside the aneurysm's open ICA end, its loop
-            // intact inside D). The vessel goes on to that end: the nearest one is taken.
+            // intact inside D); the vessel goes on to the nearest such end. Else, where the hole
+            // has bitten into the vessel's cut end, that cut's plane (the end's rim left on it).
             let open_end = open_end
                 .or_else(|| open_end_in(centerline, &in_e, &st.anchor))
                 .or_else(|| bitten_end(rim, &st.anchor));
@@ -850,11 +852,10 @@ fn junction_tangent(a: &Anchor, j: &Point3<f64>, leave: &Vector3<f64>) -> Vector
         .unwrap_or(*leave)
 }
 
-/// Distance from `p` to the half-line from the anchor into D (to the anchor itself behind it).
 /// The open vessel end of `centerline` inside E (`in_e`) nearest to `from`, as the far anchor
 /// of a curve from `from`: at the end loop's centre, pointing into the vessel along its branch
-/// (over about `from`'s radius), with `from`'s radius; its section is not read (`clear` false).
-/// None when no open end lies in E.
+/// (over about `from`'s radius), with the loop's radius (`from`'s where the endpoint has none);
+/// its section is not read (`clear` false). None when no open end lies in E.
 fn open_end_in(
     centerline: &Centerline,
     in_e: &dyn Fn(&Point3<f64>) -> bool,
@@ -1010,6 +1011,7 @@ fn bitten_end(rim: &[Point3<f64>], from: &Anchor) -> Option<Anchor> {
     })
 }
 
+/// Distance from `p` to the half-line from the anchor into D (to the anchor itself behind it).
 fn axis_distance(a: &Anchor, p: &Point3<f64>) -> f64 {
     let v = p - a.point;
     let along = v.dot(&a.into).max(0.0);
