@@ -879,12 +879,12 @@ fn open_end_in(
             .points
             .last()
             .map_or(f64::INFINITY, |q| (q - end.position).norm());
-    let mut along: Box<dyn Iterator<Item = &Point3<f64>>> = if at_start {
-        Box::new(br.points.iter())
+    let inward = |q: &&Point3<f64>| (*q - end.position).norm() >= from.radius;
+    let inner = if at_start {
+        br.points.iter().find(inward)
     } else {
-        Box::new(br.points.iter().rev())
-    };
-    let inner = along.find(|q| (*q - end.position).norm() >= from.radius)?;
+        br.points.iter().rev().find(inward)
+    }?;
     Some(Anchor {
         point: end.position,
         into: (inner - end.position).try_normalize(1e-12)?,
@@ -933,7 +933,8 @@ fn bitten_end(rim: &[Point3<f64>], from: &Anchor) -> Option<Anchor> {
     });
     let far = &order[..(n / 3).max(3)];
     let m = far.len();
-    let mut best: Option<(usize, Vector3<f64>, Point3<f64>)> = None;
+    // The plane's rim points, its normal, and a point on it.
+    let mut best: Option<(Vec<Point3<f64>>, Vector3<f64>, Point3<f64>)> = None;
     // A fixed sequence of triples (no randomness: the same input gives the same output).
     let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
     let mut next = || {
@@ -959,17 +960,18 @@ fn bitten_end(rim: &[Point3<f64>], from: &Anchor) -> Option<Anchor> {
         if rim.iter().any(|p| (p - a).dot(&out) > tol) {
             continue;
         }
-        let on: Vec<&Point3<f64>> = rim
+        let on: Vec<Point3<f64>> = rim
             .iter()
             .filter(|p| (*p - a).dot(&normal).abs() <= tol)
+            .copied()
             .collect();
-        let spread = on.iter().map(|p| (*p - a).norm()).fold(0.0, f64::max);
-        if spread >= from.radius && best.as_ref().map_or(true, |(k, _, _)| on.len() > *k) {
-            best = Some((on.len(), normal, a));
+        let spread = on.iter().map(|p| (p - a).norm()).fold(0.0, f64::max);
+        if spread >= from.radius && best.as_ref().map_or(true, |(k, _, _)| on.len() > k.len()) {
+            best = Some((on, normal, a));
         }
     }
-    let (count, normal, on) = best?;
-    if count < BITTEN_MIN_POINTS {
+    let (arc, normal, on) = best?;
+    if arc.len() < BITTEN_MIN_POINTS {
         return None;
     }
     let along = (on - from.point).dot(&normal) / t.dot(&normal);
@@ -981,17 +983,13 @@ fn bitten_end(rim: &[Point3<f64>], from: &Anchor) -> Option<Anchor> {
     // end's centre where the vessel bends before its end: the aneurysm's ICA).
     let e1 = any_perpendicular(&normal);
     let e2 = normal.cross(&e1);
-    let arc: Vec<&Point3<f64>> = rim
-        .iter()
-        .filter(|p| (*p - on).dot(&normal).abs() <= tol)
-        .collect();
     let flat: Vec<(f64, f64)> = arc
         .iter()
-        .map(|p| ((*p - on).dot(&e1), (*p - on).dot(&e2)))
+        .map(|p| ((p - on).dot(&e1), (p - on).dot(&e2)))
         .collect();
     let fitted = fit_circle(&flat).and_then(|(x, y)| {
         let c = on + e1 * x + e2 * y;
-        let r = arc.iter().map(|p| (*p - c).norm()).sum::<f64>() / arc.len() as f64;
+        let r = arc.iter().map(|p| (p - c).norm()).sum::<f64>() / arc.len() as f64;
         (0.5 * from.radius..=2.0 * from.radius)
             .contains(&r)
             .then_some((c, r))
