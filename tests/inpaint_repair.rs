@@ -526,6 +526,47 @@ fn an_inward_input_is_turned_outward_and_repaired() {
     assert!(r.stitched, "{:?}", r.fallback);
 }
 
+#[test]
+fn a_narrowing_whose_region_reaches_an_open_end_is_widened() {
+    // A 50% narrowing 3 radii from a tube's open end, picked with a ball that holds the end's
+    // rim (the end's cap is then in D). Its wall is the damage all the same: the ball was once
+    // taken for a hole's, the fill kept off the narrowed wall, and nothing was restored (the
+    // seed-26 iliac of benches/repair_real: 7.3h / −33% in D).
+    let tube = vesselmsr::mesh::primitives::open_tube(3.0, 40.0, 96, 241);
+    let (z0, sigma) = (9.0, 2.7);
+    let mut damaged = tube.clone();
+    for v in damaged.vertices.iter_mut() {
+        let f = 1.0 - 0.5 * (-(v.z - z0).powi(2) / (2.0 * sigma * sigma)).exp();
+        v.x *= f;
+        v.y *= f;
+    }
+    let d = [Ball {
+        center: Point3::new(0.0, 0.0, z0),
+        radius: 10.0,
+    }];
+    let h = 0.25;
+    let opts = RepairOptions {
+        voxel: Some(h),
+        intact_lumen: vec![true],
+        ..RepairOptions::default()
+    };
+    let r = repair(&damaged, &d, &opts).unwrap();
+    assert!(mesh_info(&r.mesh).watertight);
+    assert_eq!(r.region_fill, ["widened"]);
+    let (truth, _) = vesselmsr::mesh::cap::cap_holes(&tube, &Default::default()).unwrap();
+    let (closed, _) = vesselmsr::mesh::cap::cap_holes(&damaged, &Default::default()).unwrap();
+    let before = volume_error_in(&closed, &truth, &d);
+    let hd = hausdorff_in(&r.mesh, &truth, &d) / h;
+    let ve = volume_error_in(&r.mesh, &truth, &d);
+    println!(
+        "narrowing by an open end: {hd:.2}h, {:+.2}% in D (damaged {:+.1}%)",
+        100.0 * ve,
+        100.0 * before
+    );
+    assert!(before < -0.15, "{before}");
+    assert!(hd <= 1.5 && ve.abs() <= 0.05, "{hd}h {ve}");
+}
+
 /// A straight open tube (radius 3, ends cut at z = 0 and z = 40) chopped by a ball of radius 3
 /// at (3, 0, `z`), its region D 1.3 chops wide, repaired at voxel 0.25: the damaged mesh, the
 /// repair, and the repair's Hausdorff distance in D (voxels) and volume error in D against the

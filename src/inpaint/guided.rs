@@ -1704,6 +1704,9 @@ fn fit_circle(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
     Some((-0.5 * sol.x, -0.5 * sol.y))
 }
 
+/// How much longer (a fraction) [`ray_polygon`] takes each edge at both ends.
+const EDGE_HAIR: f64 = 1e-9;
+
 /// Distance from the origin along the unit direction `dir` to the closed polygon `poly` (the
 /// nearest crossing ahead), 2-D.
 fn ray_polygon(dir: (f64, f64), poly: &[(f64, f64)]) -> Option<f64> {
@@ -1719,7 +1722,9 @@ fn ray_polygon(dir: (f64, f64), poly: &[(f64, f64)]) -> Option<f64> {
         }
         let t = (p.0 * (-e.1) - p.1 * (-e.0)) / den;
         let u = (dir.0 * p.1 - dir.1 * p.0) / den;
-        if t > 0.0 && (0.0..=1.0).contains(&u) && best.is_none_or(|b| t < b) {
+        // A ray through a corner meets both edges there at u = 1 and u = 0 up to rounding,
+        // which can put both just outside: the corner's edges are taken a hair longer.
+        if t > 0.0 && (-EDGE_HAIR..=1.0 + EDGE_HAIR).contains(&u) && best.is_none_or(|b| t < b) {
             best = Some(t);
         }
     }

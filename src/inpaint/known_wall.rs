@@ -13,7 +13,10 @@
 //! smoothstep to its full value at the rim. Nodes over the hole (whose nearest wall is the rim)
 //! and nodes behind the wall (in the lumen) keep the full weight. Balls with no cap triangle in
 //! them (a narrowing, an occlusion given as a region of a closed mesh) keep the full weight:
-//! their wall is the damage.
+//! their wall is the damage. So do the balls of an intact, only narrowed lumen whatever caps
+//! they hold: a narrowing's region that reaches an open vessel end holds that end's cap, but
+//! its wall is still the damage (the left iliac's stenosis 3 radii from its cut end, seed 26 of
+//! `benches/repair_real`, was left as narrow as it came, 7.3h / −33% in D).
 
 use super::region::Ball;
 use crate::bvh::MeshBvh;
@@ -29,12 +32,14 @@ pub const RIM_REACH_VOXELS: f64 = 3.0;
 
 /// Lowers `weights` (the fill's blend weight per node of `phi0`'s grid) over the intact wall of
 /// D's hole balls (see the module docs), at the nodes where the fill `psi` lies below the input
-/// `phi0`. `closed` is the capped input and `cap_faces` its cap triangles; `h` the voxel (world
+/// `phi0`. `closed` is the capped input and `cap_faces` its cap triangles; `intact` says per
+/// ball whether its lumen is intact, only narrowed (missing entries: no); `h` the voxel (world
 /// units). Returns the number of nodes whose weight was lowered.
 pub fn keep_known_wall(
     closed: &TriMesh,
     cap_faces: Range<usize>,
     balls: &[Ball],
+    intact: &[bool],
     phi0: &Grid3,
     psi: &Grid3,
     weights: &mut [f32],
@@ -44,7 +49,10 @@ pub fn keep_known_wall(
     if rim.is_empty() {
         return 0;
     }
-    let hole_ball = rim_balls(&rim, balls);
+    let mut hole_ball = rim_balls(&rim, balls);
+    for (hole, &narrowed) in hole_ball.iter_mut().zip(intact) {
+        *hole &= !narrowed;
+    }
     let wall: Vec<[u32; 3]> = closed
         .faces
         .iter()
@@ -213,6 +221,7 @@ mod tests {
             &closed,
             report.cap_faces.clone(),
             &d,
+            &[],
             &phi0,
             &psi,
             &mut w,
@@ -235,7 +244,22 @@ mod tests {
         // Without a cap in D (a narrowing of a closed mesh) nothing changes.
         let mut w2 = vec![1.0f32; phi0.data().len()];
         assert_eq!(
-            keep_known_wall(&closed, 0..0, &d, &phi0, &psi, &mut w2, h),
+            keep_known_wall(&closed, 0..0, &d, &[], &phi0, &psi, &mut w2, h),
+            0
+        );
+        assert!(w2.iter().all(|&v| v == 1.0));
+        // Nor where the ball's lumen is intact, only narrowed, whatever caps it holds.
+        assert_eq!(
+            keep_known_wall(
+                &closed,
+                report.cap_faces.clone(),
+                &d,
+                &[true],
+                &phi0,
+                &psi,
+                &mut w2,
+                h
+            ),
             0
         );
         assert!(w2.iter().all(|&v| v == 1.0));

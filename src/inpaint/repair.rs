@@ -646,6 +646,7 @@ pub fn repair_with_centerline(
         &closed_input,
         cap_faces,
         balls,
+        &opts.intact_lumen,
         &phi0,
         &psi,
         &mut weights,

@@ -183,16 +183,47 @@ fn widen_stretch(
         return None;
     }
     let fr = frames(&points, &br.tangent[a]);
-    let radii: Vec<f64> = points
+    let sections: Vec<Option<Vec<f64>>> = points
         .par_iter()
         .zip(&fr)
-        .flat_map_iter(|(c, f)| {
+        .map(|(c, f)| {
             let k = nearest(stretch, c);
             widened_section(bvh, centerline, bi, c, f, target[k], rays)
-                .unwrap_or_else(|| vec![0.0; rays])
         })
         .collect();
+    let radii = bridge_missing(&sections)?;
     Some(GuideTube::from_radii(points, fr, radii, rays))
+}
+
+/// The sections' radii in order, each missing one (None) interpolated ray by ray between the
+/// nearest sections on either side (copied from the one side at the ends); None when every
+/// section is missing. (A missing section once became a section of radius 0, and the tube was
+/// pinched there: a groove in the widened lumen, as deep as the narrowing.)
+fn bridge_missing(sections: &[Option<Vec<f64>>]) -> Option<Vec<f64>> {
+    let known: Vec<usize> = (0..sections.len())
+        .filter(|&i| sections[i].is_some())
+        .collect();
+    let (&first, &last) = (known.first()?, known.last()?);
+    // known[next] is the first known section after the current one.
+    let mut next: usize = 0;
+    let mut out = Vec::new();
+    for (i, section) in sections.iter().enumerate() {
+        if let Some(s) = section {
+            out.extend_from_slice(s);
+            next += 1;
+            continue;
+        }
+        let p = if next == 0 { first } else { known[next - 1] };
+        let q = known.get(next).copied().unwrap_or(last);
+        let (sp, sq) = (sections[p].as_deref()?, sections[q].as_deref()?);
+        let w = if q > p {
+            (i as f64 - p as f64) / (q - p) as f64
+        } else {
+            0.0
+        };
+        out.extend(sp.iter().zip(sq).map(|(x, y)| x + (y - x) * w));
+    }
+    Some(out)
 }
 
 /// Index of the point of `pts` nearest to `p`.
@@ -245,4 +276,21 @@ fn widened_section(
         return Some(wall.iter().map(|w| w.0.hypot(w.1)).collect());
     }
     scaled_section(&wall, (gx, gy), k, &dirs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_section_is_bridged_from_its_neighbours() {
+        let s = |r: f64| Some(vec![r, 2.0 * r]);
+        let got = bridge_missing(&[None, s(1.0), None, None, s(4.0), None]).unwrap();
+        assert_eq!(
+            got,
+            [1.0, 2.0, 1.0, 2.0, 2.0, 4.0, 3.0, 6.0, 4.0, 8.0, 4.0, 8.0]
+        );
+        assert_eq!(bridge_missing(&[s(1.0)]).unwrap(), [1.0, 2.0]);
+        assert!(bridge_missing(&[None, None]).is_none());
+    }
 }
