@@ -13,12 +13,14 @@
 //!   the mesh without every triangle that has a vertex inside the ball of 1.5R on the point (an
 //!   open hole), its largest connected component kept; D = the ball of 1.5R·1.3.
 //! - a 50% stenosis: a centreline point (seeded) more than 4R from the junctions and the
-//!   endpoints (3R, then 2R, where no point is 4R away, with a note), 3σ of branch on both
+//!   endpoints (3R, then 2R, where no point is 4R away, with a note; the lesion then shorter
+//!   in proportion, σ = 1.2R × 3/4 or × 2/4, so that it fits the vessel), 3σ of branch on both
 //!   sides, the inscribed radius within 0.75–1.33 R over them (a healthy stretch; R its
 //!   inscribed radius, σ = 1.2R), and level: R (averaged over one radius of arc) within 10%
-//!   of the mean of those 4σ away on either side, so that 50% of R is 50% of the healthy lumen
-//!   (where no site is level, as on the aneurysm's short ICA, a healthy one, with a note giving
-//!   how far it is from level); every vertex whose closest
+//!   of each of those σ, 2σ, 3σ (the rim of D) and 4σ (the shoulders) away on either side,
+//!   so that 50% of R is 50% of the healthy lumen, not of a natural dip or bulge under the lesion
+//!   (where no site is level, a healthy one, with a note giving how far it is from level);
+//!   every vertex whose closest
 //!   centreline branch is this one, within 2.5R of it and 4σ along it, moved towards its
 //!   projection c(s) on the branch polyline: v ← c + (v − c)·(1 − 0.5·exp(−(s − s₀)²/(2σ²))),
 //!   s the arc length. D = the ball of 3σ on the point.
@@ -308,7 +310,8 @@ const DRAWS: usize = 20_000;
 const SITE_CLEARANCES: [f64; 3] = [4.0, 3.0, 2.0];
 /// The bend of the first chop is sought this many radii away from the branch ends.
 const BEND_CLEARANCE: f64 = 4.0;
-/// The synthetic stenosis: radius × (1 − DEGREE·exp(−s²/(2σ²))), σ = SIGMA·R.
+/// The synthetic stenosis: radius × (1 − DEGREE·exp(−s²/(2σ²))), σ = SIGMA·R (shortened where
+/// the site's clearance was relaxed: [`stenosis_sigma`]).
 const DEGREE: f64 = 0.5;
 const SIGMA: f64 = 1.2;
 /// The stenosis's region D and its healthy stretch: this many σ on each side.
@@ -319,12 +322,20 @@ const MOVE_RADII: f64 = 2.5;
 /// A healthy stretch: inscribed radii within [R·HEALTHY, R/HEALTHY].
 const HEALTHY: f64 = 0.75;
 /// A stenosis site is as wide as the vessel around it: its inscribed radius (averaged over one
-/// radius of arc) within this fraction of the mean of those at the two ends of the stretch the
-/// stenosis moves (MOVE_SIGMAS σ away, where the shoulders lie). Otherwise the vessel is
-/// narrowed or bulged there of itself, and "50%" of its radius is not 50% of the healthy lumen:
-/// on the carotid (seeds 25, 26) the site fell on the external carotid's origin, 36% narrower
-/// than the artery 6 mm on (1.85 against 2.9 mm), and the 50% stenosis was a 68% one.
+/// radius of arc) within this fraction of each of those [`LEVEL_SIGMAS`] σ away on either
+/// side, out to the ends of the stretch the stenosis moves (MOVE_SIGMAS σ away, where the
+/// shoulders lie). Otherwise the vessel is narrowed or bulged there of itself, and "50%" of its
+/// radius is not 50% of the healthy lumen: on the carotid (seeds 25, 26) the site fell on the
+/// external carotid's origin, 36% narrower than the artery 6 mm on (1.85 against 2.9 mm), and
+/// the 50% stenosis was a 68% one. Checked at MOVE_SIGMAS σ alone, a dip under the lesion
+/// passed where the vessel 4σ on happened to match it: the coronary of seed 26 (a 2.06 mm
+/// lumen between 2.43 mm bulges 3 mm either side) and the external carotid of seed 25 (2.41
+/// mm, 2.91 mm 3.5 mm before it) were 56–57% stenoses against the lumen beside them; and
+/// against the mean of both sides, a bulge on one side passed (the coronary's, 14% wider 2 radii
+/// on, the other side level: 55.5%).
 const UNIFORM: f64 = 0.1;
+/// The distances, in σ, at which a stenosis site's level is checked.
+const LEVEL_SIGMAS: [f64; 4] = [1.0, 2.0, STENOSIS_SIGMAS, MOVE_SIGMAS];
 /// The occlusion: the slab's half-thickness and reach, its healthy stretch and region, in R.
 const SLAB_HALF: f64 = 0.5;
 const SLAB_REACH: f64 = 2.0;
@@ -612,10 +623,10 @@ fn end_bite_points(v: &Vessel, rng: &mut SplitMix) -> Vec<(Point3<f64>, f64, Str
 
 /// Centreline points for a stenosis or occlusion: `window` radii of branch on both sides whose
 /// inscribed radius stays within [R·HEALTHY, R/HEALTHY], more than `clearance` radii from
-/// every junction and endpoint; with `uniform` (radii), the site's radius within [`UNIFORM`]
-/// of the mean of those `uniform` radii of arc away on either side (at the branch's ends where
-/// it is shorter).
-fn sites(cl: &Centerline, window: f64, clearance: f64, uniform: Option<f64>) -> Vec<Site> {
+/// every junction and endpoint; and for each of `uniform` (radii), the site's radius within
+/// [`UNIFORM`] of the mean of those that many radii of arc away on either side (at the branch's
+/// ends where it is shorter).
+fn sites(cl: &Centerline, window: f64, clearance: f64, uniform: &[f64]) -> Vec<Site> {
     let mut out = Vec::new();
     for (bi, b) in cl.branches.iter().enumerate() {
         let cum = arc(&b.points);
@@ -635,9 +646,9 @@ fn sites(cl: &Centerline, window: f64, clearance: f64, uniform: Option<f64>) -> 
             let healthy = (0..b.points.len())
                 .filter(|&j| (cum[j] - cum[i]).abs() <= reach)
                 .all(|j| b.radius[j] >= HEALTHY * r && b.radius[j] <= r / HEALTHY);
-            let level = uniform.is_none_or(|w| {
-                level_ratio(b, &cum, i, w).is_some_and(|q| (q - 1.0).abs() <= UNIFORM)
-            });
+            let level = uniform
+                .iter()
+                .all(|&w| level_ratio(b, &cum, i, w).is_some_and(|q| (q - 1.0).abs() <= UNIFORM));
             if clear && healthy && level {
                 out.push(Site {
                     branch: bi,
@@ -652,9 +663,9 @@ fn sites(cl: &Centerline, window: f64, clearance: f64, uniform: Option<f64>) -> 
     out
 }
 
-/// The inscribed radius at point `i` of branch `b` (`cum`: its arc lengths) over the mean of
-/// those `w` radii of arc away on either side (at the branch's ends where it is shorter), each
-/// averaged over one radius of arc; None where a side has no point.
+/// The inscribed radius at point `i` of branch `b` (`cum`: its arc lengths) over that `w` radii
+/// of arc away on the side where the two differ more (at the branch's ends where it is
+/// shorter), each averaged over one radius of arc; None where a side has no point.
 fn level_ratio(b: &Branch, cum: &[f64], i: usize, w: f64) -> Option<f64> {
     let r = b.radius[i];
     let len = cum.last().copied().unwrap_or(0.0);
@@ -670,22 +681,36 @@ fn level_ratio(b: &Branch, cum: &[f64], i: usize, w: f64) -> Option<f64> {
         mean_at((cum[i] - w * r).max(0.0))?,
         mean_at((cum[i] + w * r).min(len))?,
     );
-    Some(here / (0.5 * (a + c)))
+    // The side farther from level.
+    Some(
+        [here / a, here / c]
+            .into_iter()
+            .max_by(|p, q| (p - 1.0).abs().total_cmp(&(q - 1.0).abs()))?,
+    )
 }
 
 /// A seeded site of [`sites`] at the first clearance of [`SITE_CLEARANCES`] that has one, with
-/// that clearance.
+/// that clearance; `window` and `uniform` (radii) as functions of the clearance.
 fn pick(
     cl: &Centerline,
-    window: f64,
-    uniform: Option<f64>,
+    window: impl Fn(f64) -> f64,
+    uniform: impl Fn(f64) -> Vec<f64>,
     rng: &mut SplitMix,
 ) -> Option<(Site, f64)> {
     SITE_CLEARANCES.iter().find_map(|&clearance| {
-        let found = sites(cl, window, clearance, uniform);
+        let found = sites(cl, window(clearance), clearance, &uniform(clearance));
         let k = (rng.uniform() * found.len() as f64) as usize;
         found.into_iter().nth(k).map(|site| (site, clearance))
     })
+}
+
+/// The stenosis's σ, in radii, at a site `clearance` radii from the junctions and ends:
+/// [`SIGMA`], shortened in proportion where the clearance had to be relaxed, so that the lesion
+/// and the healthy lumen beside it fit the vessel (on the aneurysm's short ICA a lesion of
+/// σ = 1.2R reached both of its ends, and no lumen beside it was left unnarrowed to measure
+/// it against).
+fn stenosis_sigma(clearance: f64) -> f64 {
+    SIGMA * clearance / SITE_CLEARANCES[0]
 }
 
 /// The note of a site whose clearance had to be relaxed.
@@ -759,7 +784,7 @@ fn chop_case(v: &Vessel, n: usize, p: Point3<f64>, r: f64, tag: &str) -> Case {
     }
 }
 
-fn stenosis_case(v: &Vessel, cl: &Centerline, site: &Site) -> Case {
+fn stenosis_case(v: &Vessel, cl: &Centerline, site: &Site, sigma_radii: f64) -> Case {
     let b = &cl.branches[site.branch];
     let cum = arc(&b.points);
     let others: Vec<(&[Point3<f64>], Vec<f64>)> = cl
@@ -770,7 +795,7 @@ fn stenosis_case(v: &Vessel, cl: &Centerline, site: &Site) -> Case {
         .map(|(_, o)| (o.points.as_slice(), arc(&o.points)))
         .collect();
     let (s0, r) = (cum[site.index], site.radius);
-    let sigma = SIGMA * r;
+    let sigma = sigma_radii * r;
     let mut damaged = v.mesh.clone();
     let mut moved = 0;
     let mut centre_ratio = Vec::new();
@@ -872,25 +897,41 @@ fn cases(v: &Vessel, index: u64, seed: u64, end_bites: bool) -> Vec<Case> {
     };
     let mut rng = SplitMix(seed ^ (index << 32) ^ 1);
     // A level site, else (with a note) the vessel's healthy stretch as it is.
-    let window = STENOSIS_SIGMAS * SIGMA;
-    let level = MOVE_SIGMAS * SIGMA;
-    let picked = pick(cl, window, Some(level), &mut rng)
+    let window = |c: f64| STENOSIS_SIGMAS * stenosis_sigma(c);
+    let levels = |c: f64| {
+        let sigma = stenosis_sigma(c);
+        LEVEL_SIGMAS.iter().map(|k| k * sigma).collect::<Vec<f64>>()
+    };
+    let picked = pick(cl, window, levels, &mut rng)
         .map(|p| (p, true))
-        .or_else(|| pick(cl, window, None, &mut rng).map(|p| (p, false)));
+        .or_else(|| pick(cl, window, |_| Vec::new(), &mut rng).map(|p| (p, false)));
     match picked {
         Some(((site, clearance), is_level)) => {
-            let mut case = stenosis_case(v, cl, &site);
+            let sigma = stenosis_sigma(clearance);
+            let mut case = stenosis_case(v, cl, &site, sigma);
             case.note += &relaxed(clearance);
+            if clearance < SITE_CLEARANCES[0] {
+                case.note += &format!(" (σ = {sigma:.2} R)");
+            }
             if !is_level {
                 let b = &cl.branches[site.branch];
-                if let Some(q) = level_ratio(b, &arc(&b.points), site.index, level) {
-                    case.note += &format!(
-                        " (not level: no site's radius is within {:.0}% of the vessel's {level:.1} \
-                         radii on either side; this one is {:+.0}%)",
-                        100.0 * UNIFORM,
-                        100.0 * (q - 1.0)
-                    );
-                }
+                let cum = arc(&b.points);
+                let off: Vec<String> = levels(clearance)
+                    .iter()
+                    .filter_map(|&w| {
+                        let q = level_ratio(b, &cum, site.index, w)?;
+                        Some(format!(
+                            "{:+.0}% against {w:.1} radii on",
+                            100.0 * (q - 1.0)
+                        ))
+                    })
+                    .collect();
+                case.note += &format!(
+                    " (not level: no site's radius is within {:.0}% of the vessel's on either \
+                     side; this one is {})",
+                    100.0 * UNIFORM,
+                    off.join(", ")
+                );
             }
             out.push(case);
         }
@@ -899,7 +940,7 @@ fn cases(v: &Vessel, index: u64, seed: u64, end_bites: bool) -> Vec<Case> {
         }
     }
     let mut rng = SplitMix(seed ^ (index << 32) ^ 2);
-    match pick(cl, OCCLUSION_WINDOW, None, &mut rng) {
+    match pick(cl, |_| OCCLUSION_WINDOW, |_| Vec::new(), &mut rng) {
         Some((site, clearance)) => {
             let mut case = occlusion_case(v, &site);
             case.note += &relaxed(clearance);
