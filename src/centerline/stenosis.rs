@@ -6,7 +6,7 @@
 //! (the wall turns there), and the diameters are median-filtered over about one radius. At each
 //! point the healthy lumen beyond it on each side (its *shoulder*) is the widest filtered
 //! diameter met going outward, up to where the diameter falls 3% below it again (the nearest
-//! healthy lumen, not a farther bulge), levels off after rising 5% from the point (under 1.5%
+//! healthy lumen, not a farther bulge), levels off after rising 5% from the point (under 1%
 //! more over the next median radius: the lumen beside a lesion, not the widest one up the
 //! vessel's taper or flare beyond it), or [`SHOULDER_REACH`] median diameters of arc. A side whose reach runs past the
 //! measured points while the diameter is still rising towards them (a junction's unmeasured

@@ -2068,6 +2068,26 @@ mod tests {
     }
 
     #[test]
+    fn every_ray_through_a_corner_meets_the_polygon() {
+        // A section read along the rays has its corners on them; scaled about a centroid a
+        // rounding error off the origin, they stay there, and each ray meets two edges at a
+        // corner (it once missed both on a synthetic tube's sections).
+        let dirs = ray_dirs(48);
+        let r = |j: usize| 1.0 + 0.3 * (3.0 * j as f64).sin();
+        let wall: Vec<(f64, f64)> = (0..48)
+            .map(|j| (r(j) * dirs[j].0, r(j) * dirs[j].1))
+            .collect();
+        let got = scaled_section(&wall, (1e-17, -2e-17), 1.7, &dirs).unwrap();
+        for (j, t) in got.iter().enumerate() {
+            assert!(
+                (t - 1.7 * r(j)).abs() < 1e-9,
+                "{j}: {t} against {}",
+                1.7 * r(j)
+            );
+        }
+    }
+
+    #[test]
     fn the_circle_through_a_third_of_a_ring_has_its_centre() {
         // 16 points on 120° of a circle of radius 2 around (0.7, −0.3): Kåsa's fit is exact.
         let pts: Vec<(f64, f64)> = (0..16)
