@@ -137,9 +137,13 @@ struct Filtered {
 fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Option<usize>) {
     // One median radius of arc (`reach` is SHOULDER_REACH median diameters).
     let radius = reach / (2.0 * SHOULDER_REACH);
-    let side = |order: &[usize], edge: usize| -> (usize, bool) {
+    let side = |edge: usize| -> (usize, bool) {
+        // The m-th point from k towards `edge`.
+        let at = |m: usize| if edge < k { k - m } else { k + m };
+        let len = k.abs_diff(edge);
         let mut best = k;
-        for (n, &j) in order.iter().enumerate() {
+        for m in 1..=len {
+            let j = at(m);
             // Past the reach, or past the shoulder: fallen 3% below the widest so far (the
             // nearest healthy lumen, not a farther bulge of the vessel's natural variation).
             if (s[j] - s[k]).abs() > reach || (best != k && d[j] < 0.97 * d[best]) {
@@ -154,14 +158,14 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
             // the taper, a reach away, is not the lumen beside the lesion.
             if d[best] >= (1.0 + RISEN) * d[k] {
                 let ahead = || {
-                    order[n + 1..]
-                        .iter()
-                        .take_while(|&&a| (s[a] - s[j]).abs() <= radius)
+                    (m + 1..=len)
+                        .map(at)
+                        .take_while(|&a| (s[a] - s[j]).abs() <= radius)
                 };
                 let covered = ahead()
                     .last()
-                    .is_some_and(|&a| (s[a] - s[j]).abs() >= 0.75 * radius);
-                if covered && ahead().all(|&a| d[a] < (1.0 + LEVEL_RISE) * d[best]) {
+                    .is_some_and(|a| (s[a] - s[j]).abs() >= 0.75 * radius);
+                if covered && ahead().all(|a| d[a] < (1.0 + LEVEL_RISE) * d[best]) {
                     return (best, true);
                 }
             }
@@ -170,7 +174,7 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
         // the edge and the diameter still rises into the edge (by 3% over the last radius).
         let near_edge = |j: usize| (s[j] - s[edge]).abs() <= 0.25 * reach;
         let inner = (0..s.len())
-            .filter(|&j| (s[j] - s[edge]).abs() <= reach / (2.0 * SHOULDER_REACH))
+            .filter(|&j| (s[j] - s[edge]).abs() <= radius)
             .max_by(|&a, &b| (s[a] - s[edge]).abs().total_cmp(&(s[b] - s[edge]).abs()))
             .unwrap_or(edge);
         (
@@ -178,10 +182,8 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
             best == k || !near_edge(best) || d[edge] <= 1.03 * d[inner],
         )
     };
-    let left_order: Vec<usize> = (0..k).rev().collect();
-    let right_order: Vec<usize> = (k + 1..s.len()).collect();
-    let (left, lk) = side(&left_order, 0);
-    let (right, rk) = side(&right_order, s.len() - 1);
+    let (left, lk) = side(0);
+    let (right, rk) = side(s.len() - 1);
     if !lk && !rk {
         return (Some(left), Some(right));
     }
