@@ -638,8 +638,7 @@ fn end_bite_points(v: &Vessel, rng: &mut SplitMix) -> Vec<(Point3<f64>, f64, Str
 /// Centreline points for a stenosis or occlusion: `window` radii of branch on both sides whose
 /// inscribed radius stays within [R·HEALTHY, R/HEALTHY], more than `clearance` radii from
 /// every junction and endpoint; and for each of `uniform` (radii), the site's radius within
-/// [`UNIFORM`] of the mean of those that many radii of arc away on either side (at the branch's
-/// ends where it is shorter).
+/// [`UNIFORM`] of each of those that many radii of arc away on either side ([`level_ratio`]).
 fn sites(cl: &Centerline, window: f64, clearance: f64, uniform: &[f64]) -> Vec<Site> {
     let mut out = Vec::new();
     for (bi, b) in cl.branches.iter().enumerate() {
