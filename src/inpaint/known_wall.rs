@@ -49,10 +49,7 @@ pub fn keep_known_wall(
     if rim.is_empty() {
         return 0;
     }
-    let mut hole_ball = rim_balls(&rim, balls);
-    for (hole, &narrowed) in hole_ball.iter_mut().zip(intact) {
-        *hole &= !narrowed;
-    }
+    let hole_ball = hole_balls(&rim, balls, intact);
     let wall: Vec<[u32; 3]> = closed
         .faces
         .iter()
@@ -116,13 +113,22 @@ pub fn keep_known_wall(
         .sum()
 }
 
-/// Per ball: whether a segment of `rim` has an end in it.
-pub fn rim_balls(rim: &[(Point3<f64>, Point3<f64>)], balls: &[Ball]) -> Vec<bool> {
+/// Per ball: whether it is a hole's, a segment of `rim` with an end in it and its lumen not
+/// `intact` (only narrowed: a narrowing's region that reaches an open vessel end holds that end's
+/// cap, but its wall is the damage; missing entries: not intact).
+pub fn hole_balls(
+    rim: &[(Point3<f64>, Point3<f64>)],
+    balls: &[Ball],
+    intact: &[bool],
+) -> Vec<bool> {
     balls
         .iter()
-        .map(|ball| {
-            rim.iter()
-                .any(|(a, b)| ball.contains(a) || ball.contains(b))
+        .enumerate()
+        .map(|(i, ball)| {
+            !intact.get(i).copied().unwrap_or(false)
+                && rim
+                    .iter()
+                    .any(|(a, b)| ball.contains(a) || ball.contains(b))
         })
         .collect()
 }

@@ -28,7 +28,7 @@ use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::checks::RepairChecks;
 use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions, HoleCaps, JUNCTION_FILL};
 use super::junction::{fill_junction, Branch};
-use super::known_wall::{hole_rims, keep_known_wall, rim_balls, rim_points};
+use super::known_wall::{hole_balls, hole_rims, keep_known_wall, rim_points};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{fill_msr, MsrFillOptions};
 use super::paper::{fill_paper, PaperOptions, DT_VOXELS2};
@@ -541,7 +541,9 @@ pub fn repair_with_centerline(
             let rim = hole_rims(&closed_input, cap_faces.clone(), balls);
             let holes = HoleCaps {
                 faces: cap_faces.clone(),
-                in_ball: rim_balls(&rim, balls),
+                // Intact balls are sorted out per group by the planner (a group's cap is read
+                // unless all its balls are intact).
+                in_ball: hole_balls(&rim, balls, &[]),
                 rim: rim_points(&rim),
             };
             let plans = centerline.map_or_else(Vec::new, |c| {
