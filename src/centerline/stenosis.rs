@@ -8,9 +8,11 @@
 //! diameter met going outward, up to where the diameter falls 3% below it again (the nearest
 //! healthy lumen, not a farther bulge), levels off after rising 5% from the point (under 1%
 //! more over the next median radius: the lumen beside a lesion, not the widest one up the
-//! vessel's taper or flare beyond it), or [`SHOULDER_REACH`] median diameters of arc. A side whose reach runs past the
-//! measured points while the diameter is still rising towards them (a junction's unmeasured
-//! flare, a branch end next to the lesion) has no known shoulder; the other side's is used.
+//! vessel's taper or flare beyond it), rises slowest before quickening again (the lesion's
+//! flank meeting a bulb's flare, see [`QUICKEN`]), or [`SHOULDER_REACH`] median diameters of
+//! arc. A side whose reach runs past the measured points while the diameter is still rising
+//! towards them (a junction's unmeasured flare, a branch end next to the lesion) has no known
+//! shoulder; the other side's is used.
 //! Two references follow from the shoulders:
 //! - the *local* reference: the straight line between the two shoulders, read at the point —
 //!   the vessel's own diameter there had it not narrowed (ECST's estimate of the original
@@ -43,6 +45,10 @@ const RISEN: f64 = 0.05;
 /// the healthy one (1.5% stopped at 2.6σ, 1.6% short, and read the bench's aortas' 50%
 /// stenoses as 45.1–45.4%).
 const LEVEL_RISE: f64 = 0.01;
+/// A rise over half a radius quickens again (a flare beyond the lesion) when it is this much
+/// (and half as much again) above the slowest met since the flank: twice `LEVEL_RISE`, well
+/// above the filtered profile's noise.
+const QUICKEN: f64 = 0.02;
 
 /// Options of [`find_stenoses`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -142,6 +148,20 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
         let at = |m: usize| if edge < k { k - m } else { k + m };
         let len = k.abs_diff(edge);
         let mut best = k;
+        // The relative rise over the next half radius from the m-th point (None where the
+        // measured points stop short of 3/4 of it).
+        let rise_ahead = |m: usize| -> Option<f64> {
+            let j = at(m);
+            let last = (m + 1..=len)
+                .map(at)
+                .take_while(|&a| (s[a] - s[j]).abs() <= 0.5 * radius)
+                .last()?;
+            ((s[at(len)] - s[j]).abs() >= 0.375 * radius).then(|| d[last] / d[j] - 1.0)
+        };
+        // The steepest rise met going out (the lesion's flank), and the slowest since, once
+        // risen (point, rise).
+        let mut steepest = 0.0_f64;
+        let mut slowest: Option<(usize, f64)> = None;
         for m in 1..=len {
             let j = at(m);
             // Past the reach, or past the shoulder: fallen 3% below the widest so far (the
@@ -167,6 +187,25 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
                     .is_some_and(|a| (s[a] - s[j]).abs() >= 0.75 * radius);
                 if covered && ahead().all(|a| d[a] < (1.0 + LEVEL_RISE) * d[best]) {
                     return (best, true);
+                }
+            }
+            // Or where the rise, having slowed to under half the flank's, quickens again (by
+            // half and by QUICKEN at least): the flank has met a flare beyond the lesion
+            // without levelling off, and the lumen beside the lesion is where it rose slowest.
+            // A lesion's tail alone only slows outward.
+            if let Some(rise) = rise_ahead(m) {
+                let risen = d[best] >= (1.0 + RISEN) * d[k];
+                if let Some((at_slowest, lo)) = slowest {
+                    if risen && lo <= 0.5 * steepest && rise >= (1.5 * lo).max(lo + QUICKEN) {
+                        return (at_slowest, true);
+                    }
+                }
+                if rise > steepest {
+                    // Still on the flank, quickening towards its steepest.
+                    steepest = rise;
+                    slowest = None;
+                } else if risen && slowest.map_or(true, |(_, lo)| rise < lo) {
+                    slowest = Some((j, rise));
                 }
             }
         }
@@ -468,6 +507,36 @@ mod tests {
             (r.local - 2.0).abs() < 0.02 && (r.normal - 2.0).abs() < 0.02,
             "{r:?}"
         );
+    }
+
+    #[test]
+    fn the_shoulder_before_a_bulb_is_where_the_flank_meets_its_flare() {
+        // A 50% narrowing (σ = 1.2) in a stretch of diameter 2 whose lumen doubles over 4 units
+        // (a carotid bulb) starting `gap` units past the throat: the lumen beside the lesion is
+        // 2, not the bulb's 4. With a gap of 4 the lumen levels off for under a radius (1 unit)
+        // before the bulb; with 3 the lesion's tail runs into the flare without levelling.
+        // Either way the lumen rises on within every radius, so the level-off rule alone took
+        // the bulb for the shoulder (local references 2.59 and 2.65).
+        let s: Vec<f64> = (0..200).map(|i| i as f64 * 0.2).collect();
+        let idx: Vec<usize> = (0..s.len()).collect();
+        for gap in [4.0, 3.0] {
+            let d: Vec<f64> = s
+                .iter()
+                .map(|&x| {
+                    let t = ((x - 20.0 - gap) / 4.0).clamp(0.0, 1.0);
+                    let healthy = 2.0 + 2.0 * t * t * (3.0 - 2.0 * t);
+                    healthy * (1.0 - 0.5 * (-(x - 20.0).powi(2) / (2.0 * 1.44)).exp())
+                })
+                .collect();
+            let k = 100;
+            let r = reference_at(&s, &d, &idx, k, 8.0);
+            let [Some(_), Some(right)] = r.shoulders else {
+                panic!("gap {gap}: both shoulders: {r:?}");
+            };
+            assert!(right.diameter < 2.1, "gap {gap}: {r:?}");
+            let pct = (1.0 - d[k] / r.local) * 100.0;
+            assert!((pct - 50.0).abs() < 3.0, "gap {gap}: {pct} {r:?}");
+        }
     }
 
     #[test]
