@@ -567,6 +567,59 @@ fn a_narrowing_whose_region_reaches_an_open_end_is_widened() {
     assert!(hd <= 1.5 && ve.abs() <= 0.05, "{hd}h {ve}");
 }
 
+#[test]
+fn a_narrowing_before_a_bulb_is_widened_to_the_lumen_beside_it() {
+    // A 50% narrowing (σ = 1.2 radii) whose tail runs into a bulb's flare 3.3 radii on (the
+    // lumen doubling over 5 radii, as a carotid bulb), its region D reaching the flare. The
+    // points between the lesion and the flare once read their shoulders across the lesion on
+    // one side and up the bulb on the other, took that line for the healthy lumen, and widened
+    // the lesion to it (the carotid narrowing of benches/repair_real, seeds 21 and 23: 2.8h /
+    // +53% in D).
+    let tube = vesselmsr::mesh::primitives::open_tube(3.0, 60.0, 96, 361);
+    let (z0, sigma, z1, flare) = (20.0, 3.6, 30.0, 15.0);
+    let bulb = |z: f64| {
+        let t = ((z - z1) / flare).clamp(0.0, 1.0);
+        1.0 + t * t * (3.0 - 2.0 * t)
+    };
+    let mut truth = tube.clone();
+    for v in truth.vertices.iter_mut() {
+        let f = bulb(v.z);
+        v.x *= f;
+        v.y *= f;
+    }
+    let mut damaged = truth.clone();
+    for v in damaged.vertices.iter_mut() {
+        let f = 1.0 - 0.5 * (-(v.z - z0).powi(2) / (2.0 * sigma * sigma)).exp();
+        v.x *= f;
+        v.y *= f;
+    }
+    let d = [Ball {
+        center: Point3::new(0.0, 0.0, z0),
+        radius: 10.8,
+    }];
+    let h = 0.25;
+    let opts = RepairOptions {
+        voxel: Some(h),
+        intact_lumen: vec![true],
+        ..RepairOptions::default()
+    };
+    let r = repair(&damaged, &d, &opts).unwrap();
+    assert!(mesh_info(&r.mesh).watertight);
+    assert_eq!(r.region_fill, ["widened"]);
+    let (truth, _) = vesselmsr::mesh::cap::cap_holes(&truth, &Default::default()).unwrap();
+    let (closed, _) = vesselmsr::mesh::cap::cap_holes(&damaged, &Default::default()).unwrap();
+    let before = volume_error_in(&closed, &truth, &d);
+    let hd = hausdorff_in(&r.mesh, &truth, &d) / h;
+    let ve = volume_error_in(&r.mesh, &truth, &d);
+    println!(
+        "narrowing before a bulb: {hd:.2}h, {:+.2}% in D (damaged {:+.1}%)",
+        100.0 * ve,
+        100.0 * before
+    );
+    assert!(before < -0.15, "{before}");
+    assert!(hd <= 1.5 && ve.abs() <= 0.05, "{hd}h {ve}");
+}
+
 /// A straight open tube (radius 3, ends cut at z = 0 and z = 40) chopped by a ball of radius 3
 /// at (3, 0, `z`), its region D 1.3 chops wide, repaired at voxel 0.25: the damaged mesh, the
 /// repair, and the repair's Hausdorff distance in D (voxels) and volume error in D against the

@@ -45,9 +45,11 @@ const RISEN: f64 = 0.05;
 /// the healthy one (1.5% stopped at 2.6σ, 1.6% short, and read the bench's aortas' 50%
 /// stenoses as 45.1–45.4%).
 const LEVEL_RISE: f64 = 0.01;
-/// A rise over half a radius quickens again (a flare beyond the lesion) when it is this much
-/// (and half as much again) above the slowest met since the flank: twice `LEVEL_RISE`, well
-/// above the filtered profile's noise.
+/// The rise over half a radius has slowed when it is this much below the steepest met going
+/// out (the lesion's flank), and quickens again (a flare beyond the lesion) when it is this
+/// much, and half as much again, above the slowest since: twice `LEVEL_RISE`, well above the
+/// filtered profile's noise. (Half the flank's steepest, tried first, missed the slowing seen
+/// from a point up the flank, where the steepest part is behind.)
 const QUICKEN: f64 = 0.02;
 
 /// Options of [`find_stenoses`].
@@ -189,14 +191,14 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
                     return (best, true);
                 }
             }
-            // Or where the rise, having slowed to under half the flank's, quickens again (by
+            // Or where the rise, having slowed by QUICKEN from the flank's, quickens again (by
             // half and by QUICKEN at least): the flank has met a flare beyond the lesion
             // without levelling off, and the lumen beside the lesion is where it rose slowest.
             // A lesion's tail alone only slows outward.
             if let Some(rise) = rise_ahead(m) {
                 let risen = d[best] >= (1.0 + RISEN) * d[k];
                 if let Some((at_slowest, lo)) = slowest {
-                    if risen && lo <= 0.5 * steepest && rise >= (1.5 * lo).max(lo + QUICKEN) {
+                    if risen && lo + QUICKEN <= steepest && rise >= (1.5 * lo).max(lo + QUICKEN) {
                         return (at_slowest, true);
                     }
                 }

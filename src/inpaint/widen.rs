@@ -12,7 +12,9 @@
 //! without a known shoulder: as far as the lumen stays narrower than the reference) and beyond
 //! them, inside the region, as far as the lumen is narrower than the shoulder or not measured (a
 //! shoulder read where the sections stop, beside a junction's flare, still lies on the lesion's
-//! flank). That stretch is followed along the centreline, smoothed over about a radius; at each
+//! flank). A point whose shoulders lie beyond a lesion already taken (a dip between a lesion
+//! and a bulb's flare reads one shoulder across the lesion, the other up the bulb) is no lesion
+//! of its own. That stretch is followed along the centreline, smoothed over about a radius; at each
 //! sample the input's wall is read along rays in the section plane (the narrowed lumen's own
 //! shape; a ray that ends on another branch leaves the sample out) and scaled about its centroid
 //! until its equivalent diameter 2√(A/π) is the line's there (sections already as wide are kept
@@ -88,6 +90,8 @@ pub fn plan_widening(
             let run = start..i;
             // Lesions in the run, deepest first: each from its shoulder to its shoulder.
             let mut done = vec![false; n];
+            // The throats of the lesions taken so far.
+            let mut throats: Vec<usize> = Vec::new();
             while let Some(k) = run
                 .clone()
                 .filter(|&k| !done[k] && ratio[k].is_some_and(|q| q < 1.0 - LESION_DEPTH))
@@ -97,6 +101,15 @@ pub fn plan_widening(
                     break;
                 };
                 let [left, right] = reference.shoulders;
+                // A point whose shoulders lie beyond a lesion already taken (a dip between
+                // that lesion and a bulb's flare: its walk outward crossed the lesion's throat
+                // before it rose) has its healthy line read across that lesion, not beside it.
+                let span = left.map_or(run.start, |l| l.point)..=right.map_or(run.end, |r| r.point);
+                if throats.iter().any(|t| span.contains(t)) {
+                    done[k] = true;
+                    continue;
+                }
+                throats.push(k);
                 // The healthy lumen: the straight line between the shoulders (one alone: its
                 // diameter all along), read at each point's arc length.
                 let line = |j: usize| {
