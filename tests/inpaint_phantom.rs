@@ -249,7 +249,10 @@ fn volumes_inside_the_regions() {
         let kind = p.kind;
         assert_eq!(p.regions.len(), 1);
         let ball = &p.regions[0];
-        let step = p.voxel / 2.0;
+        // Cells of one voxel (half a voxel took 8 times the winding numbers, 24 s): the lost
+        // volume matches the whole meshes' difference to 0.3% of the truth in D on each
+        // phantom (0.6% on half-voxel cells), well inside the 2% allowed.
+        let step = p.voxel;
         let truth_in = volume_in_ball(&p.truth, ball, step);
         let damaged_in = volume_in_ball(&p.damaged, ball, step);
         let truth = mesh_info(&p.truth).volume.unwrap();
