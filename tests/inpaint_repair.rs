@@ -526,6 +526,45 @@ fn an_inward_input_is_turned_outward_and_repaired() {
     assert!(r.stitched, "{:?}", r.fallback);
 }
 
+/// `truth` with a 50% Gaussian narrowing (σ world units) at z = `z0` across its axis.
+fn narrowed(truth: &TriMesh, z0: f64, sigma: f64) -> TriMesh {
+    let mut damaged = truth.clone();
+    for v in damaged.vertices.iter_mut() {
+        let f = 1.0 - 0.5 * (-(v.z - z0).powi(2) / (2.0 * sigma * sigma)).exp();
+        v.x *= f;
+        v.y *= f;
+    }
+    damaged
+}
+
+/// Repairs the narrowing of `damaged` in the ball `d` as a narrowing's region (its lumen
+/// intact) at voxel 0.25 and checks it is widened within 1.5h and 5% in D of `truth` (both open
+/// tubes, compared with their ends capped), the damaged input more than 15% short there.
+fn check_widened(truth: &TriMesh, damaged: &TriMesh, d: Ball, what: &str) {
+    let d = [d];
+    let h = 0.25;
+    let opts = RepairOptions {
+        voxel: Some(h),
+        intact_lumen: vec![true],
+        ..RepairOptions::default()
+    };
+    let r = repair(damaged, &d, &opts).unwrap();
+    assert!(mesh_info(&r.mesh).watertight);
+    assert_eq!(r.region_fill, ["widened"]);
+    let (truth, _) = vesselmsr::mesh::cap::cap_holes(truth, &Default::default()).unwrap();
+    let (closed, _) = vesselmsr::mesh::cap::cap_holes(damaged, &Default::default()).unwrap();
+    let before = volume_error_in(&closed, &truth, &d);
+    let hd = hausdorff_in(&r.mesh, &truth, &d) / h;
+    let ve = volume_error_in(&r.mesh, &truth, &d);
+    println!(
+        "{what}: {hd:.2}h, {:+.2}% in D (damaged {:+.1}%)",
+        100.0 * ve,
+        100.0 * before
+    );
+    assert!(before < -0.15, "{what}: {before}");
+    assert!(hd <= 1.5 && ve.abs() <= 0.05, "{what}: {hd}h {ve}");
+}
+
 #[test]
 fn a_narrowing_whose_region_reaches_an_open_end_is_widened() {
     // A 50% narrowing 3 radii from a tube's open end, picked with a ball that holds the end's
@@ -533,38 +572,17 @@ fn a_narrowing_whose_region_reaches_an_open_end_is_widened() {
     // taken for a hole's, the fill kept off the narrowed wall, and nothing was restored (the
     // seed-26 iliac of benches/repair_real: 7.3h / −33% in D).
     let tube = vesselmsr::mesh::primitives::open_tube(3.0, 40.0, 96, 241);
-    let (z0, sigma) = (9.0, 2.7);
-    let mut damaged = tube.clone();
-    for v in damaged.vertices.iter_mut() {
-        let f = 1.0 - 0.5 * (-(v.z - z0).powi(2) / (2.0 * sigma * sigma)).exp();
-        v.x *= f;
-        v.y *= f;
-    }
-    let d = [Ball {
+    let z0 = 9.0;
+    let d = Ball {
         center: Point3::new(0.0, 0.0, z0),
         radius: 10.0,
-    }];
-    let h = 0.25;
-    let opts = RepairOptions {
-        voxel: Some(h),
-        intact_lumen: vec![true],
-        ..RepairOptions::default()
     };
-    let r = repair(&damaged, &d, &opts).unwrap();
-    assert!(mesh_info(&r.mesh).watertight);
-    assert_eq!(r.region_fill, ["widened"]);
-    let (truth, _) = vesselmsr::mesh::cap::cap_holes(&tube, &Default::default()).unwrap();
-    let (closed, _) = vesselmsr::mesh::cap::cap_holes(&damaged, &Default::default()).unwrap();
-    let before = volume_error_in(&closed, &truth, &d);
-    let hd = hausdorff_in(&r.mesh, &truth, &d) / h;
-    let ve = volume_error_in(&r.mesh, &truth, &d);
-    println!(
-        "narrowing by an open end: {hd:.2}h, {:+.2}% in D (damaged {:+.1}%)",
-        100.0 * ve,
-        100.0 * before
+    check_widened(
+        &tube,
+        &narrowed(&tube, z0, 2.7),
+        d,
+        "narrowing by an open end",
     );
-    assert!(before < -0.15, "{before}");
-    assert!(hd <= 1.5 && ve.abs() <= 0.05, "{hd}h {ve}");
 }
 
 #[test]
@@ -575,49 +593,24 @@ fn a_narrowing_before_a_bulb_is_widened_to_the_lumen_beside_it() {
     // one side and up the bulb on the other, took that line for the healthy lumen, and widened
     // the lesion to it (the carotid narrowing of benches/repair_real, seeds 21 and 23: 2.8h /
     // +53% in D).
-    let tube = vesselmsr::mesh::primitives::open_tube(3.0, 60.0, 96, 361);
-    let (z0, sigma, z1, flare) = (20.0, 3.6, 30.0, 15.0);
-    let bulb = |z: f64| {
-        let t = ((z - z1) / flare).clamp(0.0, 1.0);
-        1.0 + t * t * (3.0 - 2.0 * t)
-    };
-    let mut truth = tube.clone();
+    let mut truth = vesselmsr::mesh::primitives::open_tube(3.0, 60.0, 96, 361);
+    let (z0, z1, flare) = (20.0, 30.0, 15.0);
     for v in truth.vertices.iter_mut() {
-        let f = bulb(v.z);
+        let t = ((v.z - z1) / flare).clamp(0.0, 1.0);
+        let f = 1.0 + t * t * (3.0 - 2.0 * t);
         v.x *= f;
         v.y *= f;
     }
-    let mut damaged = truth.clone();
-    for v in damaged.vertices.iter_mut() {
-        let f = 1.0 - 0.5 * (-(v.z - z0).powi(2) / (2.0 * sigma * sigma)).exp();
-        v.x *= f;
-        v.y *= f;
-    }
-    let d = [Ball {
+    let d = Ball {
         center: Point3::new(0.0, 0.0, z0),
         radius: 10.8,
-    }];
-    let h = 0.25;
-    let opts = RepairOptions {
-        voxel: Some(h),
-        intact_lumen: vec![true],
-        ..RepairOptions::default()
     };
-    let r = repair(&damaged, &d, &opts).unwrap();
-    assert!(mesh_info(&r.mesh).watertight);
-    assert_eq!(r.region_fill, ["widened"]);
-    let (truth, _) = vesselmsr::mesh::cap::cap_holes(&truth, &Default::default()).unwrap();
-    let (closed, _) = vesselmsr::mesh::cap::cap_holes(&damaged, &Default::default()).unwrap();
-    let before = volume_error_in(&closed, &truth, &d);
-    let hd = hausdorff_in(&r.mesh, &truth, &d) / h;
-    let ve = volume_error_in(&r.mesh, &truth, &d);
-    println!(
-        "narrowing before a bulb: {hd:.2}h, {:+.2}% in D (damaged {:+.1}%)",
-        100.0 * ve,
-        100.0 * before
+    check_widened(
+        &truth,
+        &narrowed(&truth, z0, 3.6),
+        d,
+        "narrowing before a bulb",
     );
-    assert!(before < -0.15, "{before}");
-    assert!(hd <= 1.5 && ve.abs() <= 0.05, "{hd}h {ve}");
 }
 
 /// A straight open tube (radius 3, ends cut at z = 0 and z = 40) chopped by a ball of radius 3
