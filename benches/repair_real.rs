@@ -184,8 +184,8 @@
 //!
 //! Re-measured 2026-12-06, the next session, after a report's shoulder was also taken where the
 //! rise slows and quickens again (a lesion's flank meeting a bulb's flare) and a widening no
-//! longer takes a point whose shoulders lie beyond a lesion already taken for a lesion of its
-//! own: only the narrowings moved, the carotid's of every seed (2.33–3.20h, +53–70% in D before:
+//! longer takes a point whose shoulders lie on either side of a lesion already taken for a
+//! lesion of its own: only the narrowings moved, the carotid's of every seed (2.33–3.20h, +53–70% in D before:
 //! 0.21–0.50h, −2 to −10%) and the coronary's of seed 22 (1.34h / +21% → 0.48h / +0.9%). Seeds
 //! 21–23: 1.07h / 1.3%, 44 and 65 of 75; per seed 1.40, 1.12, 0.90h; MeshLib beaten on 72,
 //! pymeshfix on 74, pymeshlab on 75. Seeds 24–27: 1.00, 1.21, 1.47, 1.49h; 51 and 85 of 100;

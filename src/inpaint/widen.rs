@@ -12,15 +12,15 @@
 //! without a known shoulder: as far as the lumen stays narrower than the reference) and beyond
 //! them, inside the region, as far as the lumen is narrower than the shoulder or not measured (a
 //! shoulder read where the sections stop, beside a junction's flare, still lies on the lesion's
-//! flank). A point whose shoulders lie beyond a lesion already taken (a dip between a lesion
-//! and a bulb's flare reads one shoulder across the lesion, the other up the bulb) is no lesion
-//! of its own. That stretch is followed along the centreline, smoothed over about a radius; at each
-//! sample the input's wall is read along rays in the section plane (the narrowed lumen's own
-//! shape; a ray that ends on another branch leaves the sample out) and scaled about its centroid
-//! until its equivalent diameter 2√(A/π) is the line's there (sections already as wide are kept
-//! as they are). The tube is cut flat at both ends and united with the input by the caller
-//! (`repair`), so the region's other vessels, a junction in it, the shoulders themselves, are the
-//! input's.
+//! flank); a point whose shoulders lie on either side of a lesion already taken (a dip between
+//! a lesion and a bulb's flare reads one shoulder across the lesion, the other up the bulb) is
+//! no lesion of its own. Each lesion's stretch is followed along the centreline, smoothed over
+//! about a radius; at each sample the input's wall is read along rays in the section plane (the
+//! narrowed lumen's own shape; a ray that ends on another branch leaves the sample out) and
+//! scaled about its centroid until its equivalent diameter 2√(A/π) is the line's there
+//! (sections already as wide are kept as they are). The tube is cut flat at both ends and
+//! united with the input by the caller (`repair`), so the region's other vessels, a junction in
+//! it, the shoulders themselves, are the input's.
 //!
 //! Before this, a narrowing's region was bridged between anchors at its border like a hole
 //! (`guided`): where the region reached a junction or a branch's closed end, the anchors lay in
@@ -101,9 +101,10 @@ pub fn plan_widening(
                     break;
                 };
                 let [left, right] = reference.shoulders;
-                // A point whose shoulders lie beyond a lesion already taken (a dip between
-                // that lesion and a bulb's flare: its walk outward crossed the lesion's throat
-                // before it rose) has its healthy line read across that lesion, not beside it.
+                // A point whose shoulders lie on either side of a lesion already taken (a dip
+                // between that lesion and a bulb's flare: its walk outward crossed the lesion's
+                // throat before it rose) has its healthy line read across that lesion, not
+                // beside it.
                 let span = left.map_or(run.start, |l| l.point)..=right.map_or(run.end, |r| r.point);
                 if throats.iter().any(|t| span.contains(t)) {
                     done[k] = true;
