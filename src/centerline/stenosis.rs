@@ -150,14 +150,17 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
         let at = |m: usize| if edge < k { k - m } else { k + m };
         let len = k.abs_diff(edge);
         let mut best = k;
+        // The points after the m-th within `window` of arc of it.
+        let ahead = move |m: usize, window: f64| {
+            let j = at(m);
+            (m + 1..=len)
+                .map(at)
+                .take_while(move |&a| (s[a] - s[j]).abs() <= window)
+        };
         // The relative rise over the next half radius from the m-th point (None where the
         // measured points stop short of 3/4 of it).
         let rise_ahead = |m: usize| -> Option<f64> {
-            let j = at(m);
-            let last = (m + 1..=len)
-                .map(at)
-                .take_while(|&a| (s[a] - s[j]).abs() <= 0.5 * radius)
-                .last()?;
+            let (j, last) = (at(m), ahead(m, 0.5 * radius).last()?);
             ((s[at(len)] - s[j]).abs() >= 0.375 * radius).then(|| d[last] / d[j] - 1.0)
         };
         // The steepest rise met going out (the lesion's flank), and the slowest since, once
@@ -178,16 +181,12 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
             // LEVEL_RISE over the next radius of arc, all of it measured). A vessel that
             // tapers or flares beyond its lesion's rim rises on, and the widest lumen met up
             // the taper, a reach away, is not the lumen beside the lesion.
-            if d[best] >= (1.0 + RISEN) * d[k] {
-                let ahead = || {
-                    (m + 1..=len)
-                        .map(at)
-                        .take_while(|&a| (s[a] - s[j]).abs() <= radius)
-                };
-                let covered = ahead()
+            let risen = d[best] >= (1.0 + RISEN) * d[k];
+            if risen {
+                let covered = ahead(m, radius)
                     .last()
                     .is_some_and(|a| (s[a] - s[j]).abs() >= 0.75 * radius);
-                if covered && ahead().all(|a| d[a] < (1.0 + LEVEL_RISE) * d[best]) {
+                if covered && ahead(m, radius).all(|a| d[a] < (1.0 + LEVEL_RISE) * d[best]) {
                     return (best, true);
                 }
             }
@@ -196,7 +195,6 @@ fn shoulders(s: &[f64], d: &[f64], k: usize, reach: f64) -> (Option<usize>, Opti
             // without levelling off, and the lumen beside the lesion is where it rose slowest.
             // A lesion's tail alone only slows outward.
             if let Some(rise) = rise_ahead(m) {
-                let risen = d[best] >= (1.0 + RISEN) * d[k];
                 if let Some((at_slowest, lo)) = slowest {
                     if risen && lo + QUICKEN <= steepest && rise >= (1.5 * lo).max(lo + QUICKEN) {
                         return (at_slowest, true);
