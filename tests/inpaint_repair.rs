@@ -11,6 +11,7 @@ use nalgebra::Point3;
 use std::collections::HashSet;
 use vesselmsr::bvh::MeshBvh;
 use vesselmsr::inpaint::phantom::{make_phantom, Phantom, PhantomKind, PhantomOptions};
+use vesselmsr::inpaint::pipeline::{repair_vessel, VesselRepair};
 use vesselmsr::inpaint::region::Ball;
 use vesselmsr::inpaint::repair::{region_margin, repair, InpaintMethod, Repair, RepairOptions};
 use vesselmsr::mesh::info::mesh_info;
@@ -775,4 +776,39 @@ fn a_rippled_wall_is_carried_across_a_hole() {
     );
     assert!(worst > 0.0, "no vertex inside the hole");
     assert!(worst < 0.5 * h, "worst {:.3} voxels", worst / h);
+}
+
+/// Regions given as balls: the pipeline traces the centreline on a thread of its own while the
+/// repair voxelizes (two threads) or first (one thread). The fill waits for it either way: the
+/// same mesh and report (timings aside), the gap bridged along the centreline, not along an axis.
+#[test]
+fn the_centreline_traced_meanwhile_gives_the_same_repair() {
+    let ph = phantom(PhantomKind::Curved);
+    let request = VesselRepair {
+        balls: ph.regions.clone(),
+        options: RepairOptions {
+            voxel: Some(ph.voxel),
+            ..RepairOptions::default()
+        },
+        ..VesselRepair::default()
+    };
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let done = pool.install(|| repair_vessel(&ph.damaged, &request, &mut |_| {}).unwrap());
+        let mut report = serde_json::to_value(&done.report).unwrap();
+        let timings = report.as_object_mut().unwrap().remove("timings").unwrap();
+        assert!(timings["centerline"].as_f64().unwrap() > 0.0);
+        (done.mesh, report)
+    };
+    let (first, first_report) = run(1);
+    let (meanwhile, meanwhile_report) = run(2);
+    assert_eq!(first.faces, meanwhile.faces);
+    assert_eq!(first.vertices, meanwhile.vertices);
+    assert_eq!(first_report, meanwhile_report);
+    for region in first_report["regions"].as_array().unwrap() {
+        assert_eq!(region["fill"], "bridge", "{region}");
+    }
 }

@@ -8,7 +8,10 @@
 //!    repeats dropped, at most [`MAX_REGIONS`].
 //! 2. The memory check of the grids ([`super::repair_budget`]), then the repair
 //!    ([`super::repair::repair_with_centerline`]); asked for holes or narrowings and none found,
-//!    the input as it is (ends capped unless kept open, outward) with a notice.
+//!    the input as it is (ends capped unless kept open, outward) with a notice. The input's
+//!    centreline is traced first when the regions are read on it (a regions file, `stenoses`);
+//!    otherwise on a thread of its own while the repair caps and voxelizes the input (the two
+//!    grids are then held at once), and the fill waits for it.
 //! 3. Optionally the quadric simplification within a fraction of the voxel, then the report
 //!    ([`RepairReport`]): volumes, per region the inpainted volume and the stenosis, the loops,
 //!    the parameters and timings. An output that is not watertight (ends not kept open) is an
@@ -18,7 +21,7 @@ use super::holes::{classify_loops, hole_regions, LoopKind, LoopOptions};
 use super::region::{read_regions, Ball, PickedSite};
 use super::region_limits::check_regions;
 pub use super::region_limits::MAX_REGIONS;
-use super::repair::{repair_with_centerline, Repair, RepairOptions};
+use super::repair::{repair_awaiting, Repair, RepairOptions};
 use super::repair_budget;
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
@@ -35,6 +38,8 @@ use crate::report::repair_report::{
 };
 use crate::{Error, Result, TriMesh};
 use std::path::PathBuf;
+use std::sync::{Mutex, OnceLock};
+use std::thread::{Scope, ScopedJoinHandle};
 use std::time::Instant;
 
 /// A point picked on a narrowing of at least this stenosis (NASCET, %) chooses that narrowing's
@@ -88,6 +93,12 @@ impl VesselRepair {
     /// The mesh's name in messages.
     pub fn name(&self) -> &str {
         self.input_path.as_deref().unwrap_or("mesh")
+    }
+
+    /// Whether the regions are read on the input's centreline (a regions file's picked points
+    /// are sized by it, `stenoses` are found on it).
+    fn regions_need_centreline(&self) -> bool {
+        self.regions_file.is_some() || self.stenoses.is_some()
     }
 
     /// Checks the options ([`Error::BadOption`] naming the field: `speed`, `time`, `epsilon`,
@@ -167,6 +178,79 @@ pub fn repair_vessel(
     events: &mut dyn FnMut(RepairEvent),
 ) -> Result<RepairedVessel> {
     request.validate()?;
+    // The regions of a regions file (picked points) and of `stenoses` are read on the
+    // centreline: it is traced first. Otherwise it is traced on a thread of its own while the
+    // repair caps and voxelizes the input, and waited for when the fill needs it (one thread
+    // asked for: in turn). The outputs are the same either way.
+    let meanwhile = !request.regions_need_centreline() && rayon::current_num_threads() > 1;
+    std::thread::scope(|scope| {
+        let traced = TracedCentreline::start(scope, mesh, meanwhile);
+        repair_traced(mesh, request, events, &traced)
+    })
+}
+
+/// The input's centreline with its diameter profiles and healthy references (or why there is
+/// none), and the seconds its tracing took.
+type Traced = (Result<HealthyVessel>, f64);
+
+fn trace(mesh: &TriMesh) -> Traced {
+    let start = Instant::now();
+    let healthy = compute_centerline(mesh, &CenterlineOptions::default())
+        .map(|(cl, _)| HealthyVessel::new(mesh, cl, &StenosisFindOptions::default()));
+    (healthy, start.elapsed().as_secs_f64())
+}
+
+/// The input's centreline, traced at once or on a scoped thread meanwhile.
+struct TracedCentreline<'scope> {
+    pending: Mutex<Option<ScopedJoinHandle<'scope, Traced>>>,
+    done: OnceLock<Traced>,
+}
+
+impl<'scope> TracedCentreline<'scope> {
+    fn start<'env>(
+        scope: &'scope Scope<'scope, 'env>,
+        mesh: &'env TriMesh,
+        meanwhile: bool,
+    ) -> Self {
+        let done = OnceLock::new();
+        let pending = if meanwhile {
+            Some(scope.spawn(move || trace(mesh)))
+        } else {
+            let _ = done.set(trace(mesh));
+            None
+        };
+        TracedCentreline {
+            pending: Mutex::new(pending),
+            done,
+        }
+    }
+
+    /// The centreline, waited for if it is being traced.
+    fn get(&self) -> &Traced {
+        self.done.get_or_init(|| {
+            let handle = self
+                .pending
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .take()
+                .expect("a centreline neither traced nor pending");
+            handle
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        })
+    }
+
+    fn healthy(&self) -> Option<&HealthyVessel> {
+        self.get().0.as_ref().ok()
+    }
+}
+
+fn repair_traced(
+    mesh: &TriMesh,
+    request: &VesselRepair,
+    events: &mut dyn FnMut(RepairEvent),
+    traced: &TracedCentreline,
+) -> Result<RepairedVessel> {
     let name = request.name();
     let mut balls: Vec<Ball> = request.balls.clone();
     let mut sources: Vec<String> = vec!["region".to_string(); balls.len()];
@@ -174,26 +258,23 @@ pub fn repair_vessel(
     if let Some(n) = check_vessel_scale(mesh, &request.units, &VesselScaleOptions::default()) {
         notices.push(n);
     }
-    // The input's centreline: healthy radii for picked points, detected narrowings, and the
-    // stenosis measured along it in the report.
-    let centerline_start = Instant::now();
-    let healthy = match compute_centerline(mesh, &CenterlineOptions::default()) {
-        Ok((cl, _)) => Some(HealthyVessel::new(
-            mesh,
-            cl,
-            &StenosisFindOptions::default(),
-        )),
-        Err(e) => {
+    // The input's centreline: healthy radii for picked points, detected narrowings, the fill,
+    // and the stenosis measured along it in the report.
+    let mut told = false;
+    let mut no_centreline = |events: &mut dyn FnMut(RepairEvent)| {
+        if let (Err(e), false) = (&traced.get().0, told) {
             events(RepairEvent::Notice(&format!(
                 "{name}: no centreline ({e}); regions are sized and measured without it"
             )));
-            None
         }
+        told = true;
     };
-    let centerline_secs = centerline_start.elapsed().as_secs_f64();
+    if request.regions_need_centreline() {
+        no_centreline(events);
+    }
     if let Some(path) = &request.regions_file {
         let site = |p: &nalgebra::Point3<f64>| {
-            let h = healthy.as_ref()?;
+            let h = traced.healthy()?;
             match h.lesion_region_at(p, PICKED_STENOSIS_MIN_PCT) {
                 Some(ball) => Some(PickedSite::Narrowing(ball)),
                 None => h.healthy_radius(p).map(PickedSite::Radius),
@@ -209,8 +290,8 @@ pub fn repair_vessel(
         }
     }
     if let Some(p) = request.stenoses {
-        let found = healthy
-            .as_ref()
+        let found = traced
+            .healthy()
             .map(|h| h.lesion_regions(p))
             .unwrap_or_default();
         if found.is_empty() {
@@ -277,9 +358,11 @@ pub fn repair_vessel(
     let mut result = if nothing_to_do {
         unrepaired(mesh, opts)
     } else {
-        repair_with_centerline(mesh, &balls, opts, healthy.as_ref())
+        repair_awaiting(mesh, &balls, opts, &|| traced.healthy())
     }
     .map_err(|e| e.context(format!("{name}: repair failed")))?;
+    no_centreline(events);
+    let (healthy, centerline_secs) = (traced.healthy(), traced.get().1);
     let decimate = match request.decimate {
         Some(voxels) if result.voxel > 0.0 => {
             events(RepairEvent::Stage("decimating"));
@@ -304,7 +387,7 @@ pub fn repair_vessel(
         &result.mesh,
         &balls,
         &sources,
-        healthy.as_ref(),
+        healthy,
         result.windings.as_ref().map(|(i, o)| [i, o]),
     );
     for (region, &fill) in regions.iter_mut().zip(&result.region_fill) {

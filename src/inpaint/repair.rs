@@ -318,6 +318,17 @@ pub fn repair_with_centerline(
     opts: &RepairOptions,
     healthy: Option<&HealthyVessel>,
 ) -> Result<Repair> {
+    repair_awaiting(mesh, balls, opts, &|| healthy)
+}
+
+/// [`repair_with_centerline`] with the centreline asked for only when the fill needs it
+/// (`healthy` may wait for it to be traced meanwhile, as `pipeline` does).
+pub(crate) fn repair_awaiting<'h>(
+    mesh: &TriMesh,
+    balls: &[Ball],
+    opts: &RepairOptions,
+    healthy: &dyn Fn() -> Option<&'h HealthyVessel>,
+) -> Result<Repair> {
     let mut timings = Vec::new();
     let mut clock = Instant::now();
     let mut lap = |name: &str, timings: &mut Vec<(String, f64)>| {
@@ -489,7 +500,7 @@ pub fn repair_with_centerline(
         if let Some(max) = opts.max_memory {
             super::repair_budget::check(mesh, balls, &exact, max)?;
         }
-        let mut resized = repair_with_centerline(mesh, balls, &exact, healthy)?;
+        let mut resized = repair_awaiting(mesh, balls, &exact, healthy)?;
         resized.radius_estimate = radius_estimate;
         return Ok(resized);
     }
@@ -516,7 +527,7 @@ pub fn repair_with_centerline(
         }
         InpaintMethod::Centerline => {
             let computed;
-            let healthy = match healthy {
+            let healthy = match healthy() {
                 Some(h) => Some(h),
                 None => match compute_centerline(mesh, &CenterlineOptions::default()) {
                     Ok((c, _)) => {

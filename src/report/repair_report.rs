@@ -143,7 +143,8 @@ pub struct RepairReport {
     pub iterations: usize,
     pub converged: bool,
     pub parameters: RepairParameters,
-    /// Seconds per phase.
+    /// Seconds per phase (`centerline` may overlap `cap` and `voxelize`: it is traced meanwhile
+    /// unless the regions are read on it).
     pub timings: serde_json::Map<String, serde_json::Value>,
 }
 
