@@ -2,9 +2,10 @@
 //! input with every vertex outside D are kept unchanged (and so are those of a piece of surface
 //! that D only grazes, within a given depth of ∂D throughout); the marching-cubes surface of the
 //! inpainted φ is kept where it lies deeper than a margin inside D; each hole the removal left is
-//! joined to the patch boundary loop facing it by a strip of triangles (a zipper that advances
-//! along whichever loop gives the shorter new edge). The result is checked (closed where the input
-//! was, manifold, consistently oriented); the caller falls back to the full re-mesh otherwise.
+//! joined to the patch boundary loop facing it by a strip of triangles (a zipper: of the strips
+//! whose triangles each advance along one loop, the one whose new edges are shortest in sum).
+//! The result is checked (closed where the input was, manifold, consistently oriented); the
+//! caller falls back to the full re-mesh otherwise.
 //!
 //! The holes lie at ∂D, the patch loops at the margin: they pair up one to one only when the
 //! surface between the two depths holds no saddle of the depth in D. Where the surface grazes ∂D
@@ -138,11 +139,20 @@ fn centroid(mesh: &TriMesh, lp: &[u32]) -> Point3<f64> {
     Point3::from(s / lp.len().max(1) as f64)
 }
 
+/// Most cells of the table of [`zipper`]'s shortest strip (one byte each, the loops' vertex
+/// counts plus one multiplied); longer pairs of loops are zipped greedily.
+const SHORTEST_STRIP_CELLS: usize = 1 << 24;
+
 /// Joins loop `a` (of the kept part, directed along its faces) and loop `b` (of the patch,
 /// directed along its faces), both as indices into `verts`, by a strip of triangles oriented
-/// consistently with both.
+/// consistently with both: from the closest pair of their vertices, a walked forward and b
+/// backward, each triangle advancing along one loop, the strip whose new edges are shortest in
+/// sum (the optimal tiling of two contours, Fuchs, Kedem and Uselton 1977, by dynamic
+/// programming over the pairs of positions). Greedily advancing along whichever loop gives the
+/// shorter next edge, as before, lost step on loops of unlike spacing and shape (a hole's rim
+/// across a junction, a third the patch loop's vertices): one loop ran ahead, and edges of 15 mm
+/// crossed a hole of edges under 2 mm. The greedy walk is kept for loops too long for the table.
 fn zipper(verts: &[Point3<f64>], a: &[u32], b: &[u32]) -> Vec<[u32; 3]> {
-    // Walk a forward and b backward, from the closest pair.
     let (n, m) = (a.len(), b.len());
     let (mut best, mut i0, mut k0) = (f64::INFINITY, 0, 0);
     for (i, &va) in a.iter().enumerate() {
@@ -153,27 +163,57 @@ fn zipper(verts: &[Point3<f64>], a: &[u32], b: &[u32]) -> Vec<[u32; 3]> {
             }
         }
     }
+    // Positions 0..=n along a and 0..=m along b (n and m: back at the start).
     let av = |i: usize| a[(i0 + i) % n];
     let bv = |k: usize| b[(k0 + m - k % m) % m];
-    let dist = |p: u32, q: u32| (verts[p as usize] - verts[q as usize]).norm();
-    let (mut i, mut k) = (0, 0);
+    let dist = |i: usize, k: usize| (verts[av(i) as usize] - verts[bv(k) as usize]).norm();
+    // Advancing a from (i, k) adds the triangle (a_i+1, a_i, b_k); advancing b, (b_k, b_k+1, a_i).
+    let advance_a = |i: usize, k: usize| [av(i + 1), av(i), bv(k)];
+    let advance_b = |i: usize, k: usize| [bv(k), bv(k + 1), av(i)];
     let mut faces = Vec::with_capacity(n + m);
-    while i < n || k < m {
-        let advance_a = if i == n {
-            false
-        } else if k == m {
-            true
+    let cells = (n + 1).saturating_mul(m + 1);
+    if cells > SHORTEST_STRIP_CELLS {
+        let (mut i, mut k) = (0, 0);
+        while i < n || k < m {
+            if k == m || (i < n && dist(i + 1, k) <= dist(i, k + 1)) {
+                faces.push(advance_a(i, k));
+                i += 1;
+            } else {
+                faces.push(advance_b(i, k));
+                k += 1;
+            }
+        }
+        return faces;
+    }
+    // Each step ends on the edge (a_i, b_k) of the position it reaches: the strip's length is
+    // the sum over the positions it passes. `from_a[i·(m+1) + k]`: reached by advancing a.
+    let mut from_a = vec![false; cells];
+    let mut above = vec![f64::INFINITY; m + 1];
+    let mut row = vec![0.0; m + 1];
+    for i in 0..=n {
+        for k in 0..=m {
+            if i == 0 && k == 0 {
+                row[0] = 0.0;
+                continue;
+            }
+            let via_a = if i > 0 { above[k] } else { f64::INFINITY };
+            let via_b = if k > 0 { row[k - 1] } else { f64::INFINITY };
+            from_a[i * (m + 1) + k] = via_a <= via_b;
+            row[k] = via_a.min(via_b) + dist(i, k);
+        }
+        std::mem::swap(&mut above, &mut row);
+    }
+    let (mut i, mut k) = (n, m);
+    while i > 0 || k > 0 {
+        if from_a[i * (m + 1) + k] {
+            i -= 1;
+            faces.push(advance_a(i, k));
         } else {
-            dist(av(i + 1), bv(k)) <= dist(av(i), bv(k + 1))
-        };
-        if advance_a {
-            faces.push([av(i + 1), av(i), bv(k)]);
-            i += 1;
-        } else {
-            faces.push([bv(k), bv(k + 1), av(i)]);
-            k += 1;
+            k -= 1;
+            faces.push(advance_b(i, k));
         }
     }
+    faces.reverse();
     faces
 }
 
@@ -280,6 +320,47 @@ mod tests {
             radius: 0.5,
         };
         (mesh, ball)
+    }
+
+    /// Loops of unlike spacing on an elongated saddle (a hole's rim across a junction, and a
+    /// patch loop three times as fine and unevenly spaced): every loop edge is used once, against
+    /// its loop's direction, and the longest edge across is 0.86 (0.85 apart at the closest;
+    /// the greedy walk, advancing along whichever loop gave the shorter next edge, ran ahead on
+    /// one loop and left an edge of 1.54).
+    #[test]
+    fn the_zipper_keeps_step_on_loops_of_unlike_spacing() {
+        let saddle = |n: usize, r: f64, amp: f64, uneven: f64| {
+            (0..n).map(move |j| {
+                let t0 = std::f64::consts::TAU * j as f64 / n as f64;
+                let t = t0 + uneven * t0.sin();
+                Point3::new(3.0 * r * t.cos(), r * t.sin(), amp * (2.0 * t).cos())
+            })
+        };
+        let mut verts: Vec<Point3<f64>> = saddle(20, 1.0, 2.0, 0.0).collect();
+        verts.extend(saddle(60, 0.85, 1.6, 0.5));
+        let a: Vec<u32> = (0..20).collect();
+        let b: Vec<u32> = (20..80).rev().collect();
+        let faces = zipper(&verts, &a, &b);
+        assert_eq!(faces.len(), 80);
+        let mut directed: Vec<(u32, u32)> = faces
+            .iter()
+            .flat_map(|f| (0..3).map(move |e| (f[e], f[(e + 1) % 3])))
+            .filter(|&(p, q)| (p < 20) == (q < 20))
+            .collect();
+        directed.sort_unstable();
+        let mut expected: Vec<(u32, u32)> = (0..20)
+            .map(|i| ((i + 1) % 20, i))
+            .chain((0..60).map(|j| (b[(j + 1) % 60], b[j])))
+            .collect();
+        expected.sort_unstable();
+        assert_eq!(directed, expected);
+        let longest = faces
+            .iter()
+            .flat_map(|f| (0..3).map(move |e| (f[e], f[(e + 1) % 3])))
+            .filter(|&(p, q)| (p < 20) != (q < 20))
+            .map(|(p, q)| (verts[p as usize] - verts[q as usize]).norm())
+            .fold(0.0, f64::max);
+        assert!(longest < 0.9, "longest edge across {longest}");
     }
 
     #[test]
