@@ -194,7 +194,22 @@
 //! seeds 24 and 27 were looked at to make the change: those two draws are no longer held out
 //! for it. Our whole command on seed 21's chops: median 0.91 s (0.49–1.44 s), 9 of 15 under
 //! 1 s, 60× MeshLib's filler call, 1.24× its whole run (the chops' path unchanged: the machine
-//! ran slower, every phase alike). The table below is still the late-morning run's.
+//! ran slower, every phase alike). Re-measured 2026-12-06, the session after, once the input's
+//! centreline was traced while the repair voxelizes (the outputs identical to the byte) and the
+//! stitch's strip became the one whose new edges are shortest in sum (the greedy walk lost step
+//! on loops of unlike spacing: seed 22's capped aorta fell back to the whole re-mesh on two
+//! junction chops, with 15–25 mm edges across the hole, and seed 23's aneurysm occlusion on the
+//! slit check): no fallback left in seeds 21–23 (3 before), 2 in 24–27 (4; both "3 holes around
+//! D but 2 patch loops", a different failure). Moved: 10 of the 75 cases, none by more than
+//! 0.01h farther, the coronary's narrowing of seed 21 1.16h → 0.55h and four occlusions closer
+//! (0.92 → 0.37h, 0.86 → 0.62h, 0.29 → 0.19h; in 24–27 0.20 → 0.09h, 0.80 → 0.39h, 0.69 →
+//! 0.36h); seeds 21–23 1.04h / 1.4%, 44 and 65 of 75, per seed 1.40, 1.12, 0.90h, MeshLib beaten
+//! on 72, pymeshfix 74, pymeshlab 75; seeds 24–27 as before (1.00, 1.21, 1.47, 1.49h; 51 and 85
+//! of 100; 92, 99, 99); the end bites unchanged. Our whole command on a chop: median 0.69 s
+//! (0.46–1.33 s) over the 45 of seeds 21–23, 35 under 1 s; seed 21 median 0.73 s (0.47–1.18 s), 10
+//! of 15 under 1 s (13 of 15 in the run just before with the old stitch at a quieter moment: the
+//! count moves with the host's load); 44× MeshLib's filler call, 1.21× its whole run. The table
+//! below is still the late-morning run's.
 //! Seed 21 per case:
 //!
 //! | vessel | case | ours h / vol | ours s | MeshLib | pymeshfix | pymeshlab |
