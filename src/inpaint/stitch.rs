@@ -150,8 +150,9 @@ const SHORTEST_STRIP_CELLS: usize = 1 << 24;
 /// sum (the optimal tiling of two contours, Fuchs, Kedem and Uselton 1977, by dynamic
 /// programming over the pairs of positions). Greedily advancing along whichever loop gives the
 /// shorter next edge, as before, lost step on loops of unlike spacing and shape (a hole's rim
-/// across a junction, a third the patch loop's vertices): one loop ran ahead, and edges of 15 mm
-/// crossed a hole of edges under 2 mm. The greedy walk is kept for loops too long for the table.
+/// across a junction, with a third of its patch loop's vertices): one loop ran ahead, and edges
+/// of 15 mm crossed a hole whose rim edges were under 2 mm. The greedy walk is kept for loops too
+/// long for the table.
 fn zipper(verts: &[Point3<f64>], a: &[u32], b: &[u32]) -> Vec<[u32; 3]> {
     let (n, m) = (a.len(), b.len());
     let (mut best, mut i0, mut k0) = (f64::INFINITY, 0, 0);
