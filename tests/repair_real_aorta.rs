@@ -195,6 +195,29 @@ fn a_region_that_grazes_the_other_iliac_is_still_stitched() {
     assert!(ve.abs() <= 0.04, "{ve}");
 }
 
+/// The benchmark's chop#1 of the capped aorta in the draw of seed 22, over the bifurcation: the
+/// hole's rim (125 vertices, round the junction) and the patch loop facing it (308) are of
+/// unlike spacing and shape. The zipper that advanced along whichever loop gave the shorter next
+/// edge lost step on them and left edges of 15–25 mm across the hole at every cut depth: the
+/// self-check refused each, and the whole vessel was re-meshed. The strip whose new edges are
+/// shortest in sum stitches it (`chop_and_repair` asserts it).
+#[test]
+fn a_junction_hole_of_the_capped_aorta_is_stitched() {
+    let dir = tempfile::tempdir().unwrap();
+    let (hd, ve, report) = chop_and_repair(
+        "aorta_abdominal_capped.stl",
+        [215.3426687825042, 135.29525643582284, 29.618966774963265],
+        11.154411028337723 / 1.3,
+        dir.path(),
+    );
+    assert_eq!(report["regions"][0]["fill"], "junction", "{report}");
+    assert!(report["parameters"]["fallback"].is_null(), "{report}");
+    // 4.23h and −6.5% in the benchmark, as the whole-vessel re-mesh gave: the junction's shape
+    // is modelled, not measured (issue 21's 3h not met here).
+    assert!(hd <= 4.75, "{hd}h");
+    assert!(ve.abs() <= 0.08, "{ve}");
+}
+
 /// The benchmark's chop#1 of the open aorta in the draw of seed 25: a hole in the aorta's top
 /// wall over the bifurcation, filled as a junction. Towards the junction point the wall chart's
 /// biharmonic fill carried the readings' slope on past the last of them and swelled one
