@@ -260,14 +260,14 @@ fn repair_traced(
     }
     // The input's centreline: healthy radii for picked points, detected narrowings, the fill,
     // and the stenosis measured along it in the report.
-    let mut told = false;
-    let mut no_centreline = |events: &mut dyn FnMut(RepairEvent)| {
-        if let (Err(e), false) = (&traced.get().0, told) {
+    // A centreline that failed is told once: before the regions read on it, else after the
+    // repair that waited for it.
+    let no_centreline = |events: &mut dyn FnMut(RepairEvent)| {
+        if let Err(e) = &traced.get().0 {
             events(RepairEvent::Notice(&format!(
                 "{name}: no centreline ({e}); regions are sized and measured without it"
             )));
         }
-        told = true;
     };
     if request.regions_need_centreline() {
         no_centreline(events);
@@ -361,7 +361,9 @@ fn repair_traced(
         repair_awaiting(mesh, &balls, opts, &|| traced.healthy())
     }
     .map_err(|e| e.context(format!("{name}: repair failed")))?;
-    no_centreline(events);
+    if !request.regions_need_centreline() {
+        no_centreline(events);
+    }
     let (healthy, centerline_secs) = (traced.healthy(), traced.get().1);
     let decimate = match request.decimate {
         Some(voxels) if result.voxel > 0.0 => {
