@@ -231,7 +231,7 @@ fn a_junction_hole_of_the_capped_aorta_is_stitched() {
 /// last reading is not carried on.
 #[test]
 fn a_junction_fill_does_not_bulge_over_the_aortas_top_wall() {
-    let (hd, ve, report) = bench_chop(
+    let (hd, ve, _) = bench_chop(
         "aorta_abdominal_open_ends.stl",
         [221.420188694023, 139.57846073912825, 30.69293311715652],
         13.495492507156944,
