@@ -1,5 +1,5 @@
-//! Padding and sub-boxes of a Grid3: world positions and values kept, extract / write-back round
-//! trips, the SubBox helpers against brute force, and the errors.
+//! Padding, sub-boxes and subsampling of a Grid3: world positions and values kept, extract /
+//! write-back round trips, the SubBox helpers against brute force, and the errors.
 
 mod common;
 use common::*;
@@ -66,6 +66,36 @@ fn pad_keeps_every_node_in_place_and_fills_the_rim() {
         g.pad(usize::MAX / 2, 0.0).is_err(),
         "overflowing padding is an error"
     );
+}
+
+#[test]
+fn subsample_keeps_every_strided_node_where_it_was() {
+    let g = random_grid([9, 8, 5], 11);
+    for stride in 1..=4 {
+        let s = g.subsample(stride).unwrap();
+        // (n − 1)/stride + 1 nodes: the last one at or before the parent's last.
+        let want = [9, 8, 5].map(|n: usize| (n - 1) / stride + 1);
+        assert_eq!(s.dims(), want, "stride {stride}");
+        assert!((s.voxel() - g.voxel() * stride as f64).abs() < 1e-15);
+        let mut seen = 0;
+        for [i, j, k] in s.whole_box().nodes() {
+            let (pi, pj, pk) = (i * stride, j * stride, k * stride);
+            assert_eq!(
+                s.get(i, j, k),
+                g.get(pi, pj, pk),
+                "stride {stride} node {i},{j},{k}"
+            );
+            assert!((s.world(i, j, k) - g.world(pi, pj, pk)).norm() < 1e-12);
+            seen += 1;
+        }
+        assert_eq!(seen, want.iter().product::<usize>());
+    }
+    assert_eq!(g.subsample(1).unwrap(), g);
+    // A grid of one node per axis stays one node; a stride past the grid keeps node 0 only.
+    let one = g.subsample(100).unwrap();
+    assert_eq!(one.dims(), [1, 1, 1]);
+    assert_eq!(one.get(0, 0, 0), g.get(0, 0, 0));
+    assert!(g.subsample(0).is_err());
 }
 
 #[test]

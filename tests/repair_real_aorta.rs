@@ -150,7 +150,16 @@ fn a_hole_in_the_open_aorta_is_filled_without_a_slit() {
         "{}",
         report["notices"]
     );
-    // Issue 21 asks for 1.5h (1.23h measured); the damaged input is 21.6h / −12.5%.
+    // The aorta there is 14 voxels in radius: its patch is meshed at twice the voxel, about the
+    // input's density, and still within 1.5h.
+    let p = &report["parameters"];
+    let (voxel, patch) = (
+        p["voxel"].as_f64().unwrap(),
+        p["patch_voxel"].as_f64().unwrap(),
+    );
+    assert!((patch - 2.0 * voxel).abs() < 1e-12 * voxel, "{p}");
+    // Issue 21 asks for 1.5h (1.20h measured; 1.18h with the patch at the voxel); the damaged
+    // input is 21.6h / −12.5%.
     assert!(hd <= 1.5, "{hd}h");
     assert!(ve.abs() <= 0.03, "{ve}");
 }

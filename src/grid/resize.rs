@@ -1,5 +1,6 @@
 //! Changing a grid's extent: padding by whole voxels, and sub-boxes of nodes that can be extracted
-//! as grids of their own (with their own transform) and written back into the parent.
+//! as grids of their own (with their own transform) and written back into the parent; and its
+//! resolution: every n-th node as a coarser grid over the same nodes' positions.
 //!
 //! A [`SubBox`] is a half-open box of node indices, `min ≤ (i, j, k) < max` per axis, like a Rust
 //! range. Node (i, j, k) of an extracted grid is node `min + (i, j, k)` of its parent, and both
@@ -185,6 +186,30 @@ impl Grid3 {
             self.data_mut()[row].copy_from_slice(values);
         }
         Ok(())
+    }
+
+    /// Every `stride`-th node on each axis, from node (0, 0, 0), as a grid of its own: voxel
+    /// `stride` times this grid's, node (i, j, k) where this grid's (stride·i, stride·j,
+    /// stride·k) is, with its value (no filtering: a signed distance's nodes are samples of the
+    /// same field). (n − 1)/stride + 1 nodes on an axis of n. Errors when `stride` is 0; a stride
+    /// of 1 gives a copy.
+    pub fn subsample(&self, stride: usize) -> Result<Grid3> {
+        if stride == 0 {
+            return Err(Error::Geometry(
+                "a grid cannot be subsampled with a stride of 0".into(),
+            ));
+        }
+        let [nx, ny, nz] = self.dims();
+        let dims = [nx, ny, nz].map(|n| (n - 1) / stride + 1);
+        let mut data = Vec::with_capacity(dims[0] * dims[1] * dims[2]);
+        for k in 0..dims[2] {
+            for j in 0..dims[1] {
+                let row = self.index(0, j * stride, k * stride);
+                data.extend(self.data()[row..row + nx].iter().step_by(stride));
+            }
+        }
+        let transform = GridTransform::new(self.world(0, 0, 0), self.voxel() * stride as f64);
+        Grid3::from_data(dims, transform, data)
     }
 
     fn check_box(&self, sub_box: &SubBox) -> Result<()> {

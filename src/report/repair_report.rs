@@ -110,6 +110,8 @@ pub struct RepairParameters {
     pub method: &'static str,
     pub voxel: f64,
     pub grid_dims: [usize; 3],
+    /// Voxel of the grid the stitched patch was meshed on (`voxel` or twice it), world units.
+    pub patch_voxel: f64,
     pub radius_estimate: f64,
     pub c: f64,
     pub time: f64,
