@@ -210,6 +210,22 @@
 //! of 15 under 1 s (13 of 15 in the run just before with the old stitch at a quieter moment: the
 //! count moves with the host's load); 44× MeshLib's filler call, 1.21× its whole run. The table
 //! below is still the late-morning run's.
+//!
+//! Re-measured 2026-12-06, a session later (load about 1.5), once the patch was meshed at twice
+//! the voxel where the vessel around D is 12 voxels or more in radius (`repair::patch_stride`;
+//! the fill's own grid unchanged): the aneurysm's and the aortas' chops, the carotid's and the
+//! coronary's not (8–10 and 4–7 voxels). Seeds 21–23: 1.05h / 1.2%, 44 and 66 of 75 (the open
+//! aorta's junction chop of seed 22 3.00h → 2.87h); per seed 1.40, 1.07, 0.98h; MeshLib beaten
+//! on 72, pymeshfix 74, pymeshlab 75; no fallback. Of the 75, 43 moved: closer by up to 0.13h
+//! (that junction chop; the capped aorta's chop#2 of seed 22 1.12h → 1.02h), farther by up to
+//! 0.08h (the capped aorta's narrowings, 0.90h → 0.98h), the volume in D 0.0–0.3% lower (chords
+//! across the wall at 2h). Seeds 24–27: 0.97, 1.21, 1.44, 1.50h; 50 and 85 of
+//! 100 (51 and 85: the capped aorta's occlusion of seed 24 1.46h → 1.52h); MeshLib beaten on 92,
+//! pymeshfix and pymeshlab on 99, as before; the report's stenosis readings unchanged. End bites
+//! 2.59h / 1.8%, 15 and 17 of 33, MeshLib beaten on 31; the phantoms as before (their vessels are
+//! under 12 voxels). Our whole command on a chop: median 0.63 s (0.42–1.23 s) over the 45 of
+//! seeds 21–23, 42 under 1 s (35 before); against MeshLib's filler call median 0.014 s, 49× at the
+//! median of the per-chop ratios (their spread is MeshLib's: 0.005–0.02 s), 1.05× its whole run.
 //! Seed 21 per case:
 //!
 //! | vessel | case | ours h / vol | ours s | MeshLib | pymeshfix | pymeshlab |
