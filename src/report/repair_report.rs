@@ -110,7 +110,8 @@ pub struct RepairParameters {
     pub method: &'static str,
     pub voxel: f64,
     pub grid_dims: [usize; 3],
-    /// Voxel of the grid the stitched patch was meshed on (`voxel` or twice it), world units.
+    /// Voxel of the grid the stitched patch was meshed on (`voxel` or twice it), world units;
+    /// `voxel` where the whole vessel was re-meshed.
     pub patch_voxel: f64,
     pub radius_estimate: f64,
     pub c: f64,
