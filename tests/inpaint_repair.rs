@@ -282,6 +282,9 @@ fn cli_repairs_the_stenosis_phantom_and_reports_it() {
     }
     assert_eq!(report["watertight"], true);
     assert_eq!(report["units"], "mm");
+    // A vessel 8 voxels in radius: its patch is meshed on the fill's own grid (`patch_stride`).
+    let params = &report["parameters"];
+    assert_eq!(params["patch_voxel"], params["voxel"], "{params}");
     let region = &report["regions"][0];
     for key in [
         "center",

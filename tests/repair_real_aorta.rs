@@ -70,6 +70,15 @@ fn repair_by_cli(damaged: &TriMesh, flag: &str, dir: &Path) -> (TriMesh, Value) 
         String::from_utf8_lossy(&run.stderr)
     );
     let report: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    // The summary names the patch's voxel where it is not the fill's (`patch_stride`).
+    let p = &report["parameters"];
+    let coarse = p["patch_voxel"].as_f64().unwrap() > p["voxel"].as_f64().unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert_eq!(
+        stdout.contains("(the patch meshed at "),
+        coarse,
+        "{stdout}\n{p}"
+    );
     (read_mesh(&output).unwrap(), report)
 }
 

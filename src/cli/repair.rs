@@ -322,8 +322,14 @@ fn print_summary(r: &RepairReport, secs: f64) {
             l.kind
         );
     }
+    // The stitched patch is meshed at twice the voxel on wide vessels (`patch_stride`).
+    let patch = if r.parameters.patch_voxel > r.parameters.voxel {
+        format!(" (the patch meshed at {} {u})", n(r.parameters.patch_voxel))
+    } else {
+        String::new()
+    };
     println!(
-        "method {}, voxel {} {u}, vessel radius ≈ {} {u}, {} iteration(s){}, {:.1} s",
+        "method {}, voxel {} {u}{patch}, vessel radius ≈ {} {u}, {} iteration(s){}, {:.1} s",
         r.parameters.method,
         n(r.parameters.voxel),
         n(r.parameters.radius_estimate),
