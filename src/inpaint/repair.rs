@@ -404,6 +404,8 @@ pub(crate) fn repair_awaiting<'h>(
     }
     lap("cap", &mut timings);
     let (lo, hi) = bounding_box(&closed_input);
+    // The default voxel's rule and the patch's stride (`patch_stride`) both read it.
+    let mean_edge = mean_edge_length(&closed_input);
     let h = match opts.voxel {
         Some(v) if v > 0.0 && v.is_finite() => v,
         Some(v) => {
@@ -412,7 +414,7 @@ pub(crate) fn repair_awaiting<'h>(
             )))
         }
         None => {
-            let rule = default_voxel(mean_edge_length(&closed_input), (hi - lo).max());
+            let rule = default_voxel(mean_edge, (hi - lo).max());
             // The curvature motions (flow, msr, paper) take a number of steps that grows as
             // h⁻² on a grid that grows as h⁻³: they work at MOTION_VOXELS_PER_RADIUS voxels
             // across the vessel's radius, the resolution their figures are measured at
@@ -712,7 +714,7 @@ pub(crate) fn repair_awaiting<'h>(
         )?;
     }
     lap("fill", &mut timings);
-    let patch_stride = patch_stride(radius_estimate, h, mean_edge_length(&closed_input));
+    let patch_stride = patch_stride(radius_estimate, h, mean_edge);
     // Stitched into the kept triangles, or (without keep_outside, or when that fails) the whole
     // vessel re-meshed. Every cut depth is tried until a stitch passes the self-checks
     // (`checks`: no face inside the solid, no long stitch edges, outward, no volume lost in D;
