@@ -227,6 +227,9 @@ pub struct Repair {
     pub converged: bool,
     /// Whether the patch was stitched into the kept triangles (false: whole re-mesh).
     pub stitched: bool,
+    /// How far beyond ∂D the patch was stitched, world units: 0, or [`STITCH_BEYOND_VOXELS`]
+    /// voxels where it could not be stitched at ∂D (the input's surface re-meshed between).
+    pub stitch_beyond: f64,
     /// Why the stitch was not used, when it was not.
     pub fallback: Option<String>,
     /// The curves of the `centerline` fill, by kind (a vessel through D, a gap bridged, a
@@ -277,6 +280,15 @@ const JUNCTION_SHAVE_R2: f64 = 0.01;
 /// voxel or more leaves room for the zipper; the shallow ones, last, follow ∂D where the surface
 /// grazes it and a deeper cut would merge the patch's loops (see `stitch`).
 const STITCH_MARGINS_VOXELS: [f64; 8] = [1.5, 1.0, 0.75, 2.5, 3.5, 0.5, 0.25, 0.0];
+
+/// Where the patch cannot be stitched at ∂D at any cut depth, it is stitched this many voxels
+/// beyond it (D grown by as much, well within the fill's grid, MARGIN_VOXELS beyond D, where the
+/// fill is the input's φ_0) before the whole vessel is re-meshed. A bifurcation's crotch that
+/// touches ∂D is the case: the input's, cut there, leaves the two daughters' holes joined at a
+/// vertex, while the patch's crotch, a fraction of a voxel out of D, joins their loops into one
+/// ("3 holes around D but 2 patch loops": the capped aorta's junction chops of
+/// `benches/repair_real` seeds 26 and 27, which took 2.3 and 1.6 s re-meshed whole).
+const STITCH_BEYOND_VOXELS: f64 = 2.0;
 
 /// The patch is meshed on every other node of the fill's grid (twice the voxel) where the vessel
 /// around D is this many voxels in radius or more (R from [`Repair::radius_estimate`]) and twice
@@ -733,9 +745,9 @@ pub(crate) fn repair_awaiting<'h>(
         },
     );
     let patch = patch?;
-    let stitch = opts.keep_outside.then(|| {
+    let stitch_in = |cut: &CutOut, balls: &[Ball]| {
         stitch_patch_checked(
-            &cut,
+            cut,
             &patch,
             balls,
             &STITCH_MARGINS_VOXELS.map(|m| m * h),
@@ -747,6 +759,27 @@ pub(crate) fn repair_awaiting<'h>(
                 None => Ok(None),
             },
         )
+    };
+    let mut stitch_beyond = 0.0;
+    let stitch = opts.keep_outside.then(|| {
+        stitch_in(&cut, balls).or_else(|first| {
+            // Once more at D grown by STITCH_BEYOND_VOXELS, where ψ is φ_0 (the fill's grid
+            // reaches MARGIN_VOXELS beyond D): the patch there is the input's surface re-meshed.
+            let grown: Vec<Ball> = balls
+                .iter()
+                .map(|b| Ball {
+                    center: b.center,
+                    radius: b.radius + STITCH_BEYOND_VOXELS * h,
+                })
+                .collect();
+            let done = stitch_in(&cut_out(&closed_input, &grown, GRAZE_VOXELS * h), &grown)
+                .map_err(|again| format!("{first}; {again} at D grown by {STITCH_BEYOND_VOXELS} voxels"))?;
+            stitch_beyond = STITCH_BEYOND_VOXELS * h;
+            notices.push(format!(
+                "the patch did not meet the input at the edge of D ({first}): it was stitched {STITCH_BEYOND_VOXELS} voxels beyond D, where the input's surface is re-meshed"
+            ));
+            Ok(done)
+        })
     });
     let stitched = matches!(stitch, Some(Ok(_)));
     let mut windings = None;
@@ -786,6 +819,7 @@ pub(crate) fn repair_awaiting<'h>(
         iterations,
         converged,
         stitched,
+        stitch_beyond,
         fallback,
         guides,
         region_fill,

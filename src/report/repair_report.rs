@@ -120,6 +120,8 @@ pub struct RepairParameters {
     pub keep_outside: bool,
     pub open_ends: bool,
     pub stitched: bool,
+    /// How far beyond D the patch was stitched, world units (0: at D; see `Repair::stitch_beyond`).
+    pub stitch_beyond: f64,
     pub junctions: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fallback: Option<String>,
