@@ -8,6 +8,8 @@
 //! - **No long edges from the stitch.** Near D, no edge that the input does not have longer than
 //!   [`LONG_EDGE_FACTOR`] times the input's mean edge and twice its longest edge there (a zipper
 //!   that closed across the lumen leaves slivers).
+//! - **In no more pieces than the input.** A piece of the patch apart from the vessel (a speck
+//!   of the grid, a blob in the lumen's outside) is no part of a repair.
 //! - **Outward, and nothing taken away.** The enclosed volume is positive, and the volume in each
 //!   ball of D is at least the input's (the damage is missing volume: a repair only adds).
 //!
@@ -18,6 +20,7 @@
 use super::region::{depth_in, Ball};
 use crate::bvh::{WindingNumber, WindingOptions};
 use crate::mesh::measures::{mean_edge_length, signed_volume};
+use crate::mesh::topology::connected_components;
 use crate::report::stenosis::volume_in_ball_with;
 use crate::TriMesh;
 use nalgebra::Point3;
@@ -60,6 +63,8 @@ pub struct RepairChecks<'a> {
     longest_near: f64,
     /// The input's volume inside each ball.
     input_volumes: Vec<f64>,
+    /// The input's connected pieces.
+    input_pieces: usize,
     /// The input's fast winding number (the report measures with it again).
     input_winding: WindingNumber,
 }
@@ -96,6 +101,7 @@ impl<'a> RepairChecks<'a> {
                 .map(|b| volume_in_ball_with(input, &winding, b))
                 .collect(),
             input_winding: winding,
+            input_pieces: connected_components(input).0,
         }
     }
 
@@ -163,6 +169,13 @@ impl<'a> RepairChecks<'a> {
                 sampled.len()
             ));
         }
+        let pieces = connected_components(output).0;
+        if pieces > self.input_pieces {
+            return Err(format!(
+                "the repaired surface is in {pieces} pieces, the input in {} (a piece apart from the vessel)",
+                self.input_pieces
+            ));
+        }
         for (k, (ball, &before)) in self.balls.iter().zip(&self.input_volumes).enumerate() {
             let after = volume_in_ball_with(output, &winding, ball);
             if after < before - 1e-3 * before.abs().max(ball.radius.powi(3)) {
@@ -205,6 +218,15 @@ mod tests {
     fn a_sphere_passes() {
         let s = icosphere(3, 1.0, Point3::origin());
         assert_eq!(check_repaired(&s, &s, &[ball()], 0.1), Ok(()));
+    }
+
+    #[test]
+    fn a_piece_apart_from_the_vessel_fails() {
+        let s = icosphere(3, 1.0, Point3::origin());
+        let mut two = s.clone();
+        two.append(&icosphere(1, 0.01, Point3::new(1.2, 0.0, 0.0)));
+        let e = check_repaired(&two, &s, &[ball()], 0.1).unwrap_err();
+        assert!(e.contains("in 2 pieces, the input in 1"), "{e}");
     }
 
     #[test]

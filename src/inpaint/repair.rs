@@ -34,7 +34,7 @@ use super::msr_fill::{fill_msr, MsrFillOptions};
 use super::paper::{fill_paper, PaperOptions, DT_VOXELS2};
 use super::region::{deepest_ball, Ball};
 use super::shave::shave_bumps;
-use super::stitch::{cut_out, stitch_patch_checked, CutOut};
+use super::stitch::{cut_out, stitch_patch_checked, without_specks, CutOut};
 use super::topology::remove_islands;
 use crate::bvh::{MeshBvh, WindingNumber};
 use crate::centerline::healthy::HealthyVessel;
@@ -744,7 +744,8 @@ pub(crate) fn repair_awaiting<'h>(
                 .then(|| RepairChecks::new(&closed_input, balls, 3.0 * h))
         },
     );
-    let patch = patch?;
+    // Closed pieces smaller than one of its cells are the grid's noise, no part of the vessel.
+    let patch = without_specks(patch?, (patch_stride as f64 * h).powi(3));
     let stitch_in = |cut: &CutOut, balls: &[Ball]| {
         stitch_patch_checked(
             cut,
