@@ -31,7 +31,11 @@
 //!    whose centreline a cap bends), end there in a round cap (a ball no wider than the
 //!    junction's inscribed sphere, unless that sphere rests on a hole's cap: the parent's own
 //!    radius stood 1.2 mm out of the wall beside the aortic bifurcation) and are joined by a
-//!    smooth minimum of a quarter radius (the fillet of a carina); a single one beside a
+//!    smooth minimum of a quarter radius (the fillet of a carina). Where two or more end in D,
+//!    a branch the damage took whole with its cut end (no anchor leads to it) joins them from
+//!    that end, read off the hole's rim: the plane holding 8 or more rim points to 10⁻³ of the
+//!    radius with the rim on one side and no vessel beyond it (`cut_end_in_rim`), at the centre
+//!    of the circle through them, its tube cut flat there. A single one beside a
 //!    vessel that crosses D is a side branch, continued to that vessel's curve where its axis
 //!    meets it and joined the same way; a single one alone is bridged to the branch's open
 //!    vessel end (the centre of a cut across the vessel, outside the damage) and cut flat there;
@@ -508,6 +512,7 @@ fn plan_group(
                     outside: outside_len(s - 1, -1),
                     run: br.points[s..=e].to_vec(),
                     partner: None,
+                    cut: false,
                 });
             }
             if e + 1 < n {
@@ -516,6 +521,7 @@ fn plan_group(
                     outside: outside_len(e + 1, 1),
                     run: br.points[s..=e].iter().rev().copied().collect(),
                     partner: None,
+                    cut: false,
                 });
             }
             if stubs.len() == first + 2 {
@@ -626,6 +632,31 @@ fn plan_group(
             }
             Some(_) => {}
             None => single.push(i),
+        }
+    }
+    // Two or more vessels ending in D are joined at a junction; a branch the damage took whole
+    // from its cut end to that junction has no anchor, but its end's rim, left on the hole's
+    // rim, tells where it was: it joins them from there.
+    if single.len() >= 2 {
+        let widest = single
+            .iter()
+            .map(|&i| stubs[i].anchor.radius)
+            .fold(0.0, f64::max);
+        let end = cut_end_in_rim(rim, widest, bvh).filter(|e| {
+            kept.iter().all(|&i| {
+                let a = &stubs[i].anchor;
+                (a.point - e.point).norm() > a.radius.max(e.radius)
+            })
+        });
+        if let Some(anchor) = end {
+            stubs.push(Stub {
+                anchor,
+                outside: f64::INFINITY,
+                run: Vec::new(),
+                partner: None,
+                cut: true,
+            });
+            single.push(stubs.len() - 1);
         }
     }
     match single.len() {
@@ -759,7 +790,10 @@ fn plan_group(
             for (&i, a) in single.iter().zip(&anchors) {
                 let leave = leaving_direction(centerline, &stubs[i], &j)
                     .map(|l| junction_tangent(a, &j, &l));
-                tubes.push(to_point(a, j, leave, cap));
+                let mut tube = to_point(a, j, leave, cap);
+                // A cut end: the vessel ends at its plane.
+                tube.flat_start = stubs[i].cut;
+                tubes.push(tube);
                 kinds.push(GuideKind::Junction);
             }
         }
@@ -775,6 +809,9 @@ struct Stub {
     outside: f64,
     run: Vec<Point3<f64>>,
     partner: Option<usize>,
+    /// The anchor is a vessel's cut end inside D, read off the hole's rim ([`cut_end_in_rim`]):
+    /// the vessel does not go on beyond it.
+    cut: bool,
 }
 
 /// The direction in which the damaged centreline leaves the junction at `j` towards the stub's
@@ -907,6 +944,98 @@ const BITTEN_PLANE_TOLERANCE: f64 = 1e-3;
 /// chop of its own radius).
 const BITTEN_MIN_POINTS: usize = 8;
 
+/// The plane of a vessel's cut among a hole's `rim` points (segmentations are clipped by planes):
+/// of the planes through three of the points `pool` indexes (`tries` triples in a fixed order:
+/// the same input gives the same output), the one holding the most rim points within `tol`,
+/// spread over `spread` or more, with no rim point beyond it on its outer side (`outer` gives
+/// that side from the plane's unit normal and a point on it, or None to pass the plane by). Returns the rim points
+/// on it, its outer normal and a point on it; None when no plane holds [`BITTEN_MIN_POINTS`].
+fn cut_plane(
+    rim: &[Point3<f64>],
+    pool: &[usize],
+    tries: usize,
+    tol: f64,
+    spread: f64,
+    outer: impl Fn(&Vector3<f64>, &Point3<f64>) -> Option<Vector3<f64>>,
+) -> Option<(Vec<Point3<f64>>, Vector3<f64>, Point3<f64>)> {
+    let m = pool.len();
+    if m == 0 {
+        return None;
+    }
+    let mut best: Option<(Vec<Point3<f64>>, Vector3<f64>, Point3<f64>)> = None;
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 33) as usize % m
+    };
+    for _ in 0..tries {
+        let (a, b, c) = (rim[pool[next()]], rim[pool[next()]], rim[pool[next()]]);
+        let Some(normal) = (b - a).cross(&(c - a)).try_normalize(1e-12) else {
+            continue;
+        };
+        let Some(out) = outer(&normal, &a) else {
+            continue;
+        };
+        if rim.iter().any(|p| (p - a).dot(&out) > tol) {
+            continue;
+        }
+        let on: Vec<Point3<f64>> = rim
+            .iter()
+            .filter(|p| (*p - a).dot(&normal).abs() <= tol)
+            .copied()
+            .collect();
+        let reach = on.iter().map(|p| (p - a).norm()).fold(0.0, f64::max);
+        if reach >= spread && best.as_ref().map_or(true, |(k, _, _)| on.len() > k.len()) {
+            best = Some((on, out, a));
+        }
+    }
+    best.filter(|(arc, _, _)| arc.len() >= BITTEN_MIN_POINTS)
+}
+
+/// A vessel's cut end inside D whose branch the damage took whole (from the end to past the
+/// junction, so that no anchor leads to it): the part of the end's rim the damage left lies on
+/// the hole's `rim` in the cut's plane (found by [`cut_plane`] among all the rim's points, the
+/// plane holding them spread over half of `widest`, the widest anchor's radius, or more), the
+/// vessel lies on one side of it and does not go on beyond it (the closed input's winding number
+/// half a radius beyond the end's centre is 0: a rim that runs along one of the slice planes of
+/// a segmentation whose vessel goes on through it is no end), and the circle through the points
+/// on it is of a vessel's size (a third to 1.5 times `widest`). The anchor is at the circle's
+/// centre, with its radius, pointing into the vessel. The aneurysm's ICA end bitten off with its
+/// branch in `benches/repair_real --end-bites`, which was bridged past it.
+fn cut_end_in_rim(rim: &[Point3<f64>], widest: f64, bvh: &MeshBvh) -> Option<Anchor> {
+    if rim.len() < BITTEN_MIN_POINTS || !(widest > 0.0) {
+        return None;
+    }
+    let tol = BITTEN_PLANE_TOLERANCE * widest;
+    let pool: Vec<usize> = (0..rim.len()).collect();
+    let (arc, out, on) = cut_plane(rim, &pool, 1024, tol, 0.5 * widest, |normal, a| {
+        // The side no rim point is on.
+        let side = |n: Vector3<f64>| rim.iter().all(|p| (p - a).dot(&n) <= tol).then_some(n);
+        side(*normal).or_else(|| side(-normal))
+    })?;
+    let e1 = any_perpendicular(&out);
+    let e2 = out.cross(&e1);
+    let flat: Vec<(f64, f64)> = arc
+        .iter()
+        .map(|p| ((p - on).dot(&e1), (p - on).dot(&e2)))
+        .collect();
+    let (x, y) = fit_circle(&flat)?;
+    let point = on + e1 * x + e2 * y;
+    let radius = arc.iter().map(|p| (p - point).norm()).sum::<f64>() / arc.len() as f64;
+    let sized = (widest / 3.0..=1.5 * widest).contains(&radius);
+    let ends = bvh.winding_number_by_rays(&(point + out * (0.5 * radius))) == Some(0);
+    (sized && ends).then_some(Anchor {
+        point,
+        into: -out,
+        radius,
+        clear: false,
+        branch: None,
+        index: 0,
+    })
+}
+
 /// Where a hole has bitten into a vessel's cut end (an open end, or a flat cap, that the damage
 /// reached), the far anchor of the curve from `from`: the part of the end's rim the damage left
 /// lies in the cut's plane, and the vessel ends there. The plane is the one through three rim
@@ -932,48 +1061,17 @@ fn bitten_end(rim: &[Point3<f64>], from: &Anchor) -> Option<Anchor> {
             .total_cmp(&(rim[a] - from.point).dot(&t))
     });
     let far = &order[..(n / 3).max(3)];
-    let m = far.len();
-    // The plane's rim points, its normal, and a point on it.
-    let mut best: Option<(Vec<Point3<f64>>, Vector3<f64>, Point3<f64>)> = None;
-    // A fixed sequence of triples (no randomness: the same input gives the same output).
-    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 33) as usize % m
-    };
-    for _ in 0..256 {
-        let (a, b, c) = (rim[far[next()]], rim[far[next()]], rim[far[next()]]);
-        let Some(normal) = (b - a).cross(&(c - a)).try_normalize(1e-12) else {
-            continue;
-        };
-        if normal.dot(&t).abs() < 50f64.to_radians().cos() {
-            continue;
-        }
-        // The end: no rim point beyond the plane, along the vessel.
-        let out = if normal.dot(&t) > 0.0 {
-            normal
-        } else {
-            -normal
-        };
-        if rim.iter().any(|p| (p - a).dot(&out) > tol) {
-            continue;
-        }
-        let on: Vec<Point3<f64>> = rim
-            .iter()
-            .filter(|p| (*p - a).dot(&normal).abs() <= tol)
-            .copied()
-            .collect();
-        let spread = on.iter().map(|p| (p - a).norm()).fold(0.0, f64::max);
-        if spread >= from.radius && best.as_ref().map_or(true, |(k, _, _)| on.len() > k.len()) {
-            best = Some((on, normal, a));
-        }
-    }
-    let (arc, normal, on) = best?;
-    if arc.len() < BITTEN_MIN_POINTS {
-        return None;
-    }
+    let facing = 50f64.to_radians().cos();
+    let (arc, normal, on) = cut_plane(rim, far, 256, tol, from.radius, |normal, _| {
+        // Facing along the vessel; the end is beyond the plane along it.
+        (normal.dot(&t).abs() >= facing).then(|| {
+            if normal.dot(&t) > 0.0 {
+                *normal
+            } else {
+                -normal
+            }
+        })
+    })?;
     let along = (on - from.point).dot(&normal) / t.dot(&normal);
     if along <= 0.0 {
         return None;
@@ -2171,6 +2269,33 @@ mod tests {
     }
 
     #[test]
+    fn a_cut_end_is_read_off_a_rim_where_the_vessel_does_not_go_on() {
+        let (cut, bite) = bitten_rim(0.0);
+        let rim: Vec<Point3<f64>> = cut.iter().chain(&bite).copied().collect();
+        // The vessel (a box around the tube, closed) ends at the cut, z = 5: its end is the
+        // centre of the rim's circle there, with its radius, pointing back into the vessel.
+        let box_to = |z: f64| {
+            MeshBvh::new(&crate::mesh::primitives::box_mesh(
+                Point3::new(-1.0, -1.0, -5.0),
+                Point3::new(1.0, 1.0, z),
+            ))
+        };
+        let end = cut_end_in_rim(&rim, 1.0, &box_to(5.0)).expect("the cut end");
+        assert!(
+            (end.point - Point3::new(0.0, 0.0, 5.0)).norm() < 1e-9,
+            "{:?}",
+            end.point
+        );
+        assert!((end.radius - 1.0).abs() < 1e-9, "{}", end.radius);
+        assert!((end.into + Vector3::z()).norm() < 1e-9, "{:?}", end.into);
+        // A vessel that goes on through the plane (a rim along a slice plane): no end; nor the
+        // bite alone, nor a circle far from the vessels' size.
+        assert!(cut_end_in_rim(&rim, 1.0, &box_to(9.0)).is_none());
+        assert!(cut_end_in_rim(&bite, 1.0, &box_to(5.0)).is_none());
+        assert!(cut_end_in_rim(&rim, 4.0, &box_to(5.0)).is_none());
+    }
+
+    #[test]
     fn an_open_end_in_the_region_is_the_far_anchor() {
         // One branch from an open end at the origin up the z axis; the region holds the end.
         let points: Vec<Point3<f64>> = (0..=20)
@@ -2298,6 +2423,7 @@ mod tests {
             outside: f64::INFINITY,
             run: br.points[20..].to_vec(),
             partner: None,
+            cut: false,
         };
         let leave = leaving_direction(&centerline, &stub, &o).expect("a path to the junction");
         assert!(
