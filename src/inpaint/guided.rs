@@ -642,6 +642,7 @@ fn plan_group(
             .iter()
             .map(|&i| stubs[i].anchor.radius)
             .fold(0.0, f64::max);
+        // (Not where an anchor already is: that vessel's own end.)
         let end = cut_end_in_rim(rim, widest, bvh).filter(|e| {
             kept.iter().all(|&i| {
                 let a = &stubs[i].anchor;
@@ -948,8 +949,9 @@ const BITTEN_MIN_POINTS: usize = 8;
 /// of the planes through three of the points `pool` indexes (`tries` triples in a fixed order:
 /// the same input gives the same output), the one holding the most rim points within `tol`,
 /// spread over `spread` or more, with no rim point beyond it on its outer side (`outer` gives
-/// that side from the plane's unit normal and a point on it, or None to pass the plane by). Returns the rim points
-/// on it, its outer normal and a point on it; None when no plane holds [`BITTEN_MIN_POINTS`].
+/// that side from the plane's unit normal and a point on it, or None to pass the plane by).
+/// Returns the rim points on it, its outer normal and a point on it; None when no plane holds
+/// [`BITTEN_MIN_POINTS`].
 fn cut_plane(
     rim: &[Point3<f64>],
     pool: &[usize],
