@@ -833,21 +833,11 @@ fn a_branch_bitten_off_with_its_open_end_is_restored_to_its_cut() {
         center: Point3::new(33.39946137282439, 31.517140147669764, 39.515266094672796),
         radius: 3.13744758988492,
     };
-    let holed = common::punch_hole(&truth, d.center, d.radius / 1.3);
-    let (count, labels) = connected_components(&holed);
-    let mut sizes = vec![0usize; count];
-    for &l in &labels {
-        sizes[l as usize] += 1;
-    }
-    let big = (0..count).max_by_key(|&c| sizes[c]).unwrap() as u32;
-    let faces = holed
-        .faces
-        .iter()
-        .zip(&labels)
-        .filter(|(_, &l)| l == big)
-        .map(|(f, _)| *f)
-        .collect();
-    let damaged = TriMesh::new(truth.vertices.clone(), faces);
+    let chop = Ball {
+        center: d.center,
+        radius: d.radius / 1.3,
+    };
+    let damaged = common::chopped(&truth, &chop);
     let request = VesselRepair {
         holes: true,
         ..VesselRepair::default()

@@ -17,36 +17,14 @@
 
 mod common;
 
-use common::{
-    data_dir, hausdorff_in, one_sided_faces_near, punch_hole, vesselmsr, volume_error_in,
-};
+use common::{chopped, data_dir, hausdorff_in, one_sided_faces_near, vesselmsr, volume_error_in};
 use nalgebra::Point3;
 use serde_json::Value;
 use std::path::Path;
 use vesselmsr::inpaint::region::Ball;
 use vesselmsr::io::{read_mesh, write_mesh};
 use vesselmsr::mesh::info::mesh_info;
-use vesselmsr::mesh::topology::connected_components;
 use vesselmsr::TriMesh;
-
-/// `mesh` without every triangle that has a vertex in `chop`, its largest piece kept.
-fn chopped(mesh: &TriMesh, chop: &Ball) -> TriMesh {
-    let holed = punch_hole(mesh, chop.center, chop.radius);
-    let (count, labels) = connected_components(&holed);
-    let mut sizes = vec![0usize; count];
-    for &l in &labels {
-        sizes[l as usize] += 1;
-    }
-    let big = (0..count).max_by_key(|&c| sizes[c]).unwrap_or(0) as u32;
-    let faces = holed
-        .faces
-        .iter()
-        .zip(&labels)
-        .filter(|(_, &l)| l == big)
-        .map(|(f, _)| *f)
-        .collect();
-    TriMesh::new(mesh.vertices.clone(), faces)
-}
 
 /// `vesselmsr repair DAMAGED FLAG -o … --report … -q` in `dir`: the repaired mesh and report.
 fn repair_by_cli(damaged: &TriMesh, flag: &str, dir: &Path) -> (TriMesh, Value) {

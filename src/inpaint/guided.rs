@@ -2233,6 +2233,18 @@ mod tests {
         (cut, bite)
     }
 
+    /// `end` is the end of [`bitten_rim`]'s untilted cut: the centre of the rim's circle on it
+    /// (the tube's axis at z = 5), with its radius, pointing back down the vessel.
+    fn assert_end_of_the_untilted_cut(end: &Anchor) {
+        assert!(
+            (end.point - Point3::new(0.0, 0.0, 5.0)).norm() < 1e-9,
+            "{:?}",
+            end.point
+        );
+        assert!((end.radius - 1.0).abs() < 1e-9, "{}", end.radius);
+        assert!((end.into + Vector3::z()).norm() < 1e-9, "{:?}", end.into);
+    }
+
     #[test]
     fn a_bitten_end_is_found_on_the_plane_of_its_cut() {
         let (cut, bite) = bitten_rim(0.0);
@@ -2241,13 +2253,7 @@ mod tests {
         // of the rim's circle on the cut, with its radius, pointing back down the vessel.
         let from = looking(Point3::new(0.4, 0.0, 0.0), Vector3::z());
         let end = bitten_end(&rim, &from).expect("the cut's plane");
-        assert!(
-            (end.point - Point3::new(0.0, 0.0, 5.0)).norm() < 1e-9,
-            "{:?}",
-            end.point
-        );
-        assert!((end.radius - 1.0).abs() < 1e-9, "{}", end.radius);
-        assert!((end.into + Vector3::z()).norm() < 1e-9, "{:?}", end.into);
+        assert_end_of_the_untilted_cut(&end);
         assert!(!end.clear);
         // A cut tilted 20°: its plane exactly; the centre of the circle fitted to the half
         // ellipse the tube leaves on it within a tenth of the radius of the tube's axis.
@@ -2283,13 +2289,7 @@ mod tests {
             ))
         };
         let end = cut_end_in_rim(&rim, 1.0, &box_to(5.0)).expect("the cut end");
-        assert!(
-            (end.point - Point3::new(0.0, 0.0, 5.0)).norm() < 1e-9,
-            "{:?}",
-            end.point
-        );
-        assert!((end.radius - 1.0).abs() < 1e-9, "{}", end.radius);
-        assert!((end.into + Vector3::z()).norm() < 1e-9, "{:?}", end.into);
+        assert_end_of_the_untilted_cut(&end);
         // A vessel that goes on through the plane (a rim along a slice plane): no end; nor the
         // bite alone, nor a circle far from the vessels' size.
         assert!(cut_end_in_rim(&rim, 1.0, &box_to(9.0)).is_none());

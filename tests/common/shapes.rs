@@ -1,9 +1,11 @@
 //! Test shapes built on `vesselmsr::mesh::primitives`: the cube [lo, hi]³, whole or with one
 //! side left open; an octahedron with coordinates f32 cannot hold (for the formats' exactness);
-//! a hole punched in a wall; any mesh as a triangle soup.
+//! a hole punched in a wall, or a chop (its largest piece kept); any mesh as a triangle soup.
 
 use nalgebra::Point3;
+use vesselmsr::inpaint::region::Ball;
 use vesselmsr::mesh::primitives::box_mesh;
+use vesselmsr::mesh::topology::connected_components;
 use vesselmsr::TriMesh;
 
 /// The axis-aligned cube [lo, hi]³: 8 vertices, 12 outward triangles.
@@ -59,6 +61,26 @@ pub fn punch_hole(mesh: &TriMesh, center: Point3<f64>, radius: f64) -> TriMesh {
     });
     assert!(holed.num_faces() < mesh.num_faces(), "nothing punched");
     holed
+}
+
+/// `mesh` without every triangle that has a vertex in `chop`, its largest piece kept (the chops
+/// of `benches/repair_real`).
+pub fn chopped(mesh: &TriMesh, chop: &Ball) -> TriMesh {
+    let holed = punch_hole(mesh, chop.center, chop.radius);
+    let (count, labels) = connected_components(&holed);
+    let mut sizes = vec![0usize; count];
+    for &l in &labels {
+        sizes[l as usize] += 1;
+    }
+    let big = (0..count).max_by_key(|&c| sizes[c]).unwrap_or(0) as u32;
+    let faces = holed
+        .faces
+        .iter()
+        .zip(&labels)
+        .filter(|(_, &l)| l == big)
+        .map(|(f, _)| *f)
+        .collect();
+    TriMesh::new(mesh.vertices.clone(), faces)
 }
 
 /// `mesh` as a triangle soup: every triangle with its own three corners (no vertex shared).
