@@ -996,6 +996,25 @@ fn cut_plane(
     best.filter(|(arc, _, _)| arc.len() >= BITTEN_MIN_POINTS)
 }
 
+/// The circle through `arc`, points on the plane through `on` with unit normal `normal`, fitted
+/// in that plane (Kåsa): its centre and the points' mean distance from it.
+fn circle_in_plane(
+    arc: &[Point3<f64>],
+    normal: &Vector3<f64>,
+    on: &Point3<f64>,
+) -> Option<(Point3<f64>, f64)> {
+    let e1 = any_perpendicular(normal);
+    let e2 = normal.cross(&e1);
+    let flat: Vec<(f64, f64)> = arc
+        .iter()
+        .map(|p| ((p - on).dot(&e1), (p - on).dot(&e2)))
+        .collect();
+    let (x, y) = fit_circle(&flat)?;
+    let centre = on + e1 * x + e2 * y;
+    let radius = arc.iter().map(|p| (p - centre).norm()).sum::<f64>() / arc.len() as f64;
+    Some((centre, radius))
+}
+
 /// A vessel's cut end inside D whose branch the damage took whole (from the end to past the
 /// junction, so that no anchor leads to it): the part of the end's rim the damage left lies on
 /// the hole's `rim` in the cut's plane (found by [`cut_plane`] among all the rim's points, the
@@ -1017,15 +1036,7 @@ fn cut_end_in_rim(rim: &[Point3<f64>], widest: f64, bvh: &MeshBvh) -> Option<Anc
         let side = |n: Vector3<f64>| rim.iter().all(|p| (p - a).dot(&n) <= tol).then_some(n);
         side(*normal).or_else(|| side(-normal))
     })?;
-    let e1 = any_perpendicular(&out);
-    let e2 = out.cross(&e1);
-    let flat: Vec<(f64, f64)> = arc
-        .iter()
-        .map(|p| ((p - on).dot(&e1), (p - on).dot(&e2)))
-        .collect();
-    let (x, y) = fit_circle(&flat)?;
-    let point = on + e1 * x + e2 * y;
-    let radius = arc.iter().map(|p| (p - point).norm()).sum::<f64>() / arc.len() as f64;
+    let (point, radius) = circle_in_plane(&arc, &out, &on)?;
     let sized = (widest / 3.0..=1.5 * widest).contains(&radius);
     let ends = bvh.winding_number_by_rays(&(point + out * (0.5 * radius))) == Some(0);
     (sized && ends).then_some(Anchor {
@@ -1081,19 +1092,8 @@ fn bitten_end(rim: &[Point3<f64>], from: &Anchor) -> Option<Anchor> {
     // The end's centre: the circle through the rim's arc on the plane (Kåsa), where it fits a
     // vessel of about the anchor's size; else where the anchor's axis meets the plane (off the
     // end's centre where the vessel bends before its end: the aneurysm's ICA).
-    let e1 = any_perpendicular(&normal);
-    let e2 = normal.cross(&e1);
-    let flat: Vec<(f64, f64)> = arc
-        .iter()
-        .map(|p| ((p - on).dot(&e1), (p - on).dot(&e2)))
-        .collect();
-    let fitted = fit_circle(&flat).and_then(|(x, y)| {
-        let c = on + e1 * x + e2 * y;
-        let r = arc.iter().map(|p| (p - c).norm()).sum::<f64>() / arc.len() as f64;
-        (0.5 * from.radius..=2.0 * from.radius)
-            .contains(&r)
-            .then_some((c, r))
-    });
+    let fitted = circle_in_plane(&arc, &normal, &on)
+        .filter(|(_, r)| (0.5 * from.radius..=2.0 * from.radius).contains(r));
     let (point, radius) = fitted.unwrap_or((from.point + t * along, from.radius));
     Some(Anchor {
         point,
