@@ -816,46 +816,65 @@ fn the_centreline_traced_meanwhile_gives_the_same_repair() {
     }
 }
 
-/// The end bite #1 of the aneurysm in `benches/repair_real --end-bites` (seed 21;
-/// ../shared/data/real): the chop (every triangle with a corner in a ball of 1.5 local radii, the
-/// largest piece kept) takes the short ICA branch whole, from its open end to past the junction,
-/// and leaves an arc of the end's rim on the hole's. No anchor leads to that branch: the two
-/// others were bridged past it, 34.7% of the volume in D missing (with an 8-triangle speck as a
-/// second piece). Its cut end is now read off the hole's rim and it joins the junction from
-/// there.
+/// End bites of the aneurysm in `benches/repair_real --end-bites` (../shared/data/real; the chop:
+/// every triangle with a corner in a ball of 1.5 local radii, the largest piece kept) that take
+/// its short ICA branch whole, from its open end to past the junction or to the parent beside
+/// it, and leave an arc of the end's rim on the hole's. No anchor leads to that branch: the
+/// others were bridged (or passed through D) without it. Its cut end is now read off the hole's
+/// rim and it joins the junction, or the parent as a side branch, from there.
 #[test]
 fn a_branch_bitten_off_with_its_open_end_is_restored_to_its_cut() {
     let Some(dir) = common::real_dir() else {
         return;
     };
     let truth = common::read_real(&dir, "ica_aneurysm_c0015.stl");
-    let d = Ball {
-        center: Point3::new(33.39946137282439, 31.517140147669764, 39.515266094672796),
-        radius: 3.13744758988492,
-    };
-    let chop = Ball {
-        center: d.center,
-        radius: d.radius / 1.3,
-    };
-    let damaged = common::chopped(&truth, &chop);
-    let request = VesselRepair {
-        holes: true,
-        ..VesselRepair::default()
-    };
-    let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
-    assert_eq!(done.report.regions.len(), 1);
-    assert_eq!(done.report.regions[0].fill, Some("junction"));
-    assert!(
-        done.report.parameters.stitched,
-        "{:?}",
-        done.report.parameters.fallback
-    );
-    assert!(mesh_info(&done.mesh).watertight);
-    assert_eq!(connected_components(&done.mesh).0, 1);
-    // Judged in D against the truth with its open ends capped flat, as the benchmark judges it
-    // (−1.4% measured there; −34.7% before).
+    // Judged in D against the truth with its open ends capped flat, as the benchmark judges it.
     let (judged, _) = vesselmsr::mesh::cap::cap_holes(&truth, &Default::default()).unwrap();
-    let ve = volume_error_in(&done.mesh, &judged, &[d]);
-    println!("bitten ICA end: volume error in D {:+.1}%", 100.0 * ve);
-    assert!(ve.abs() <= 0.05, "{ve}");
+    // (region D of the benchmark, Hausdorff and volume bounds in D): seed 21's bite #1, measured
+    // there 6.37h / −1.6% (26.93h / −34.7% bridged past the branch, with a speck of the grid as
+    // a second piece); seed 22's bite #2, 3.82h / +5.0% (9.99h / −4.7%, the parent through D
+    // alone).
+    let bites = [
+        (
+            [33.39946137282439, 31.517140147669764, 39.515266094672796],
+            3.13744758988492,
+            8.0,
+            0.05,
+        ),
+        (
+            [32.72218480557267, 32.62312795166795, 40.332934671623875],
+            2.526886191649525,
+            5.0,
+            0.07,
+        ),
+    ];
+    for (centre, radius, max_h, max_ve) in bites {
+        let d = Ball {
+            center: Point3::from(centre),
+            radius,
+        };
+        let chop = Ball {
+            center: d.center,
+            radius: d.radius / 1.3,
+        };
+        let damaged = common::chopped(&truth, &chop);
+        let request = VesselRepair {
+            holes: true,
+            ..VesselRepair::default()
+        };
+        let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
+        let p = &done.report.parameters;
+        assert_eq!(done.report.regions.len(), 1);
+        assert_eq!(done.report.regions[0].fill, Some("junction"));
+        assert!(p.stitched, "{:?}", p.fallback);
+        assert!(mesh_info(&done.mesh).watertight);
+        assert_eq!(connected_components(&done.mesh).0, 1);
+        let hd = hausdorff_in(&done.mesh, &judged, &[d]) / p.voxel;
+        let ve = volume_error_in(&done.mesh, &judged, &[d]);
+        println!(
+            "bitten ICA end at {centre:?}: {hd:.2}h, {:+.1}% in D",
+            100.0 * ve
+        );
+        assert!(hd <= max_h && ve.abs() <= max_ve, "{hd}h {ve}");
+    }
 }

@@ -32,8 +32,9 @@
 //!    junction's inscribed sphere, unless that sphere rests on a hole's cap: the parent's own
 //!    radius stood 1.2 mm out of the wall beside the aortic bifurcation) and are joined by a
 //!    smooth minimum of a quarter radius (the fillet of a carina). Where two or more end in D,
-//!    a branch the damage took whole with its cut end (no anchor leads to it) joins them from
-//!    that end, read off the hole's rim: the plane holding 8 or more rim points to 10⁻³ of the
+//!    or one crosses it, a branch the damage took whole with its cut end (no anchor leads to
+//!    it) joins them (as one more junction branch, or as a side branch) from that end, read off
+//!    the hole's rim: the plane holding 8 or more rim points to 10⁻³ of the
 //!    radius with the rim on one side and no vessel beyond it (`cut_end_in_rim`), at the centre
 //!    of the circle through them, its tube cut flat there. A single one beside a
 //!    vessel that crosses D is a side branch, continued to that vessel's curve where its axis
@@ -634,11 +635,12 @@ fn plan_group(
             None => single.push(i),
         }
     }
-    // Two or more vessels ending in D are joined at a junction; a branch the damage took whole
-    // from its cut end to that junction has no anchor, but its end's rim, left on the hole's
-    // rim, tells where it was: it joins them from there.
-    if single.len() >= 2 {
-        let widest = single
+    // Two or more vessels ending in D are joined at a junction, and a vessel crossing D takes
+    // side branches; a branch the damage took whole from its cut end to that junction, or to
+    // that vessel, has no anchor, but its end's rim, left on the hole's rim, tells where it
+    // was: it joins them from there.
+    if single.len() >= 2 || (single.is_empty() && !tubes.is_empty()) {
+        let widest = kept
             .iter()
             .map(|&i| stubs[i].anchor.radius)
             .fold(0.0, f64::max);
@@ -672,7 +674,9 @@ fn plan_group(
                 .min_by(|p, q| axis_distance(&a, p).total_cmp(&axis_distance(&a, q)))
                 .copied()
                 .expect("tubes have points");
-            tubes.push(to_point(&a, j, None, f64::INFINITY));
+            let mut tube = to_point(&a, j, None, f64::INFINITY);
+            tube.flat_start = stubs[single[0]].cut;
+            tubes.push(tube);
             kinds.push(GuideKind::Junction);
         }
         1 => {
