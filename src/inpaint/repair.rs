@@ -16,12 +16,14 @@
 //!    wall beside the hole (`known_wall`: only the hole's cap is unknown there), remove pieces that float in D or voids sealed in
 //!    it (`topology`), redistance near the surface (not after the axial fill, whose values are
 //!    distances already).
-//! 4. Mesh: marching cubes of the filled φ; with `keep_outside`, stitch the part deep in D into the
-//!    input's triangles outside D; when that fails (or without `keep_outside`), re-mesh the whole
-//!    vessel with the filled sub-box. The stitched surface is checked first (`checks`: no face
-//!    inside the solid, no long stitch edges, outward, no volume lost in D); a failed check
-//!    re-meshes the whole vessel, with the reason in `Repair::fallback`. Check that the output is
-//!    closed where the input was.
+//! 4. Mesh: marching cubes of the filled φ (closed specks smaller than a cell dropped); with
+//!    `keep_outside`, stitch the part deep in D into the input's triangles outside D, and when
+//!    that fails at every cut depth, once more [`STITCH_BEYOND_VOXELS`] beyond D; when that fails
+//!    too (or without `keep_outside`), re-mesh the whole vessel with the filled sub-box. The
+//!    stitched surface is checked first (`checks`: no face inside the solid, no long stitch
+//!    edges, no more pieces than the input, outward, no volume lost in D); a failed check counts
+//!    as a failed stitch, and the reason of a whole re-mesh is in `Repair::fallback`. Check that
+//!    the output is closed where the input was.
 
 use super::axial::fill_axial;
 use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
