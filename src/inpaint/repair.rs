@@ -18,7 +18,7 @@
 //!    distances already).
 //! 4. Mesh: marching cubes of the filled φ (closed specks smaller than a cell dropped); with
 //!    `keep_outside`, stitch the part deep in D into the input's triangles outside D, and when
-//!    that fails at every cut depth, once more [`STITCH_BEYOND_VOXELS`] beyond D; when that fails
+//!    that fails at every cut depth, once more `STITCH_BEYOND_VOXELS` beyond D; when that fails
 //!    too (or without `keep_outside`), re-mesh the whole vessel with the filled sub-box. The
 //!    stitched surface is checked first (`checks`: no face inside the solid, no long stitch
 //!    edges, no more pieces than the input, outward, no volume lost in D); a failed check counts
@@ -229,7 +229,7 @@ pub struct Repair {
     pub converged: bool,
     /// Whether the patch was stitched into the kept triangles (false: whole re-mesh).
     pub stitched: bool,
-    /// How far beyond ∂D the patch was stitched, world units: 0, or [`STITCH_BEYOND_VOXELS`]
+    /// How far beyond ∂D the patch was stitched, world units: 0, or `STITCH_BEYOND_VOXELS`
     /// voxels where it could not be stitched at ∂D (the input's surface re-meshed between).
     pub stitch_beyond: f64,
     /// Why the stitch was not used, when it was not.
