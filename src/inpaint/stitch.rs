@@ -51,20 +51,14 @@ pub(crate) fn without_specks(patch: TriMesh, min_volume: f64) -> TriMesh {
         return patch;
     }
     let volumes = component_signed_volumes(&patch, count, &labels);
-    // Each piece's edges, counted over its faces (an edge used once is a boundary edge).
-    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
-    for f in &patch.faces {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
+    // A piece with a boundary edge (used by one face) is open.
     let mut open = vec![false; count];
-    for (f, &l) in patch.faces.iter().zip(&labels) {
-        open[l as usize] |= (0..3).any(|k| {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            uses[&(a.min(b), a.max(b))] == 1
-        });
+    {
+        let edges = EdgeMap::new(&patch);
+        for (f, &l) in labels.iter().enumerate() {
+            open[l as usize] |=
+                (0..3).any(|k| edges.face_edge(f, k).is_some_and(|e| edges.valence(e) == 1));
+        }
     }
     let speck = |l: u32| !open[l as usize] && volumes[l as usize].abs() < min_volume;
     if !(0..count as u32).any(speck) {
