@@ -1000,6 +1000,24 @@ fn cut_plane(
     best.filter(|(arc, _, _)| arc.len() >= BITTEN_MIN_POINTS)
 }
 
+/// The median distance from each point to its nearest other one.
+fn median_spacing(points: &[Point3<f64>]) -> f64 {
+    let mut nearest: Vec<f64> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            points
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| k != i)
+                .map(|(_, q)| (q - p).norm())
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    nearest.sort_by(f64::total_cmp);
+    nearest.get(nearest.len() / 2).copied().unwrap_or(0.0)
+}
+
 /// The circle through `arc`, points on the plane through `on` with unit normal `normal`, fitted
 /// in that plane (Kåsa): its centre and the points' mean distance from it.
 fn circle_in_plane(
@@ -1026,7 +1044,8 @@ fn circle_in_plane(
 /// vessel lies on one side of it and does not go on beyond it (the closed input's winding number
 /// half a radius beyond the end's centre is 0: a rim that runs along one of the slice planes of
 /// a segmentation whose vessel goes on through it is no end), and the circle through the points
-/// on it is of a vessel's size (a third to 1.5 times `widest`). The anchor is at the circle's
+/// on it is of a vessel's size (a third to 1.5 times `widest`), the points a run along it (no
+/// gap of more than three rim spacings but the part the damage took). The anchor is at the circle's
 /// centre, with its radius, pointing into the vessel. The aneurysm's ICA end bitten off with its
 /// branch in `benches/repair_real --end-bites`, which was bridged past it.
 fn cut_end_in_rim(rim: &[Point3<f64>], widest: f64, bvh: &MeshBvh) -> Option<Anchor> {
@@ -1042,8 +1061,24 @@ fn cut_end_in_rim(rim: &[Point3<f64>], widest: f64, bvh: &MeshBvh) -> Option<Anc
     })?;
     let (point, radius) = circle_in_plane(&arc, &out, &on)?;
     let sized = (widest / 3.0..=1.5 * widest).contains(&radius);
+    // A cut's rim is a run of the rim's own points: along the arc (the circle less its widest
+    // gap, the part the damage took), no gap wider than three of the rim's spacings (points that
+    // only happen to lie on one plane are scattered along it: on the rippled tube's hole of
+    // `tests/inpaint_repair.rs`, 15 of them with a gap of 12 spacings; the aneurysm's bitten
+    // ends, 1.2 spacings).
+    let e1 = any_perpendicular(&out);
+    let e2 = out.cross(&e1);
+    let mut angles: Vec<f64> = arc
+        .iter()
+        .map(|p| (p - point).dot(&e2).atan2((p - point).dot(&e1)))
+        .collect();
+    angles.sort_by(f64::total_cmp);
+    let mut gaps: Vec<f64> = angles.windows(2).map(|w| w[1] - w[0]).collect();
+    gaps.push(TAU - (angles[angles.len() - 1] - angles[0]));
+    gaps.sort_by(f64::total_cmp);
+    let run = gaps[gaps.len() - 2] * radius <= 3.0 * median_spacing(rim);
     let ends = bvh.winding_number_by_rays(&(point + out * (0.5 * radius))) == Some(0);
-    (sized && ends).then_some(Anchor {
+    (sized && run && ends).then_some(Anchor {
         point,
         into: -out,
         radius,
