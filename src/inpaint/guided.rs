@@ -34,9 +34,9 @@
 //!    smooth minimum of a quarter radius (the fillet of a carina). Where two or more end in D,
 //!    or one crosses it, a branch the damage took whole with its cut end (no anchor leads to
 //!    it) joins them (as one more junction branch, or as a side branch) from that end, read off
-//!    the hole's rim: the plane holding 8 or more rim points to 10⁻³ of the
-//!    radius with the rim on one side and no vessel beyond it (`cut_end_in_rim`), at the centre
-//!    of the circle through them, its tube cut flat there. A single one beside a
+//!    the hole's rim: the plane holding 8 or more rim points to 10⁻³ of the radius, a run of
+//!    them along a circle of a vessel's size, with the rim on one side and no vessel beyond it
+//!    (`cut_end_in_rim`), at the centre of that circle, its tube cut flat there. A single one beside a
 //!    vessel that crosses D is a side branch, continued to that vessel's curve where its axis
 //!    meets it and joined the same way; a single one alone is bridged to the branch's open
 //!    vessel end (the centre of a cut across the vessel, outside the damage) and cut flat there;
