@@ -553,14 +553,14 @@ pub(crate) fn repair_awaiting<'h>(
         steps: opts.steps.max(1),
         harmonic: Default::default(),
     };
-    let mut weights = blend_weights(&depth, opts.blend_voxels * h);
+    let weights = blend_weights(&depth, opts.blend_voxels * h);
     let mut axes = Vec::new();
     let mut junctions = 0;
     let mut guides = Vec::new();
     let mut region_fill = vec![opts.method.as_str(); balls.len()];
     let mut iterations = 1;
     let mut converged = true;
-    let mut psi = match opts.method {
+    let psi = match opts.method {
         InpaintMethod::Axial => {
             let (g, a, j) =
                 fill_axial_regions(&phi0, &closed_input, &cut, balls, &depth, radius_estimate)?;
@@ -697,49 +697,72 @@ pub(crate) fn repair_awaiting<'h>(
             psi
         }
     };
-    // The intact wall around a hole is known: the fill acts in the hole's shadow only.
-    keep_known_wall(
-        &closed_input,
-        cap_faces,
-        balls,
-        &opts.intact_lumen,
-        &phi0,
-        &psi,
-        &mut weights,
-        h,
-    );
-    // The fill is united with the input: the damage a repair is for (a chopped wall, a
-    // narrowing, an occlusion) is missing volume, so what the input has in D is kept.
-    psi.data_mut()
-        .par_iter_mut()
-        .zip(phi0.data().par_iter())
-        .for_each(|(v, &k)| *v = v.min(k));
-    blend_known(&mut psi, &phi0, &weights);
-    remove_islands(&mut psi, &unknown);
-    // Marching cubes needs distances near the surface only. The axial and centreline fills
-    // give distances, which are already that; the flows' and msr's fields are redistanced first.
-    if opts.method.is_motion() {
-        redistance(
-            &mut psi,
-            &RedistanceOptions {
-                band: Some(3.0 * h),
-                ..RedistanceOptions::default()
-            },
-        )?;
-    }
-    lap("fill", &mut timings);
+    // What follows the fill works node by node (the known wall, the union with the input, the
+    // blend into φ_0, the islands), and the patch is meshed on every `patch_stride`-th node: for
+    // the centreline and axial fills, on those nodes only (the same values there; an eighth of
+    // the work at a stride of 2), the fine field being finished only for the whole-vessel
+    // re-mesh. The flows' fields are redistanced on the fine grid first.
     let patch_stride = patch_stride(radius_estimate, h, mean_edge);
+    let finish = |phi0: &Grid3, mut psi: Grid3, mut weights: Vec<f32>, unknown: &[bool]| {
+        finish_fill(
+            &closed_input,
+            cap_faces.clone(),
+            balls,
+            &opts.intact_lumen,
+            phi0,
+            &mut psi,
+            &mut weights,
+            unknown,
+            h,
+        );
+        // Marching cubes needs distances near the surface only. The axial and centreline fills
+        // give distances, which are already that; the flows' and msr's fields are redistanced
+        // first.
+        if opts.method.is_motion() {
+            redistance(
+                &mut psi,
+                &RedistanceOptions {
+                    band: Some(3.0 * h),
+                    ..RedistanceOptions::default()
+                },
+            )?;
+        }
+        Ok::<_, Error>(psi)
+    };
+    let coarse = patch_stride > 1 && !opts.method.is_motion();
+    let (field, unfinished) = if coarse {
+        let nodes = |values: &[f32]| {
+            Grid3::from_data(dims, transform, values.to_vec())
+                .and_then(|g| g.subsample(patch_stride))
+                .map(Grid3::into_data)
+        };
+        let coarse_phi0 = phi0.subsample(patch_stride)?;
+        let coarse_unknown = region_mask(&nodes(&depth)?);
+        let field = finish(
+            &coarse_phi0,
+            psi.subsample(patch_stride)?,
+            nodes(&weights)?,
+            &coarse_unknown,
+        )?;
+        (field, Some((psi, weights)))
+    } else {
+        (finish(&phi0, psi, weights, &unknown)?, None)
+    };
+    lap("fill", &mut timings);
     // Stitched into the kept triangles, or (without keep_outside, or when that fails) the whole
     // vessel re-meshed. Every cut depth is tried until a stitch passes the self-checks
     // (`checks`: no face inside the solid, no long stitch edges, outward, no volume lost in D;
     // they need a closed result). What the checks measure on the input, meanwhile.
     let (patch, checks) = rayon::join(
-        || match patch_stride {
-            // The fill's grid itself (a stride of 1 would copy it).
-            1 => extract_surface(&psi, &ExtractOptions::default()),
-            s => psi
-                .subsample(s)
-                .and_then(|g| extract_surface(&g, &ExtractOptions::default())),
+        || {
+            if coarse || patch_stride == 1 {
+                // The finished field itself (already on the patch's nodes).
+                extract_surface(&field, &ExtractOptions::default())
+            } else {
+                field
+                    .subsample(patch_stride)
+                    .and_then(|g| extract_surface(&g, &ExtractOptions::default()))
+            }
         },
         || {
             (opts.keep_outside && cut.open_edges == 0)
@@ -794,7 +817,13 @@ pub(crate) fn repair_awaiting<'h>(
             (m, None)
         }
         other => (
-            remesh_whole(&closed_input, &psi, &depth, origin, whole_dims, first, h)?,
+            {
+                let fine = match unfinished {
+                    Some((psi, weights)) => finish(&phi0, psi, weights, &unknown)?,
+                    None => field,
+                };
+                remesh_whole(&closed_input, &fine, &depth, origin, whole_dims, first, h)?
+            },
             other.and_then(|r| r.err()),
         ),
     };
@@ -830,6 +859,41 @@ pub(crate) fn repair_awaiting<'h>(
         timings,
         windings,
     })
+}
+
+/// After the fill `psi` (on `phi0`'s grid, or on every few of its nodes): the intact wall around
+/// a hole kept (`keep_known_wall`: the fill acts in the hole's shadow only), the fill united with
+/// the input (the damage a repair is for, a chopped wall, a narrowing, an occlusion, is missing
+/// volume, so what the input has in D is kept), blended into φ_0 by `weights`, and the pieces
+/// floating in D (`unknown`) removed. `h` is the voxel of the input's grid.
+#[allow(clippy::too_many_arguments)]
+fn finish_fill(
+    closed_input: &TriMesh,
+    cap_faces: std::ops::Range<usize>,
+    balls: &[Ball],
+    intact_lumen: &[bool],
+    phi0: &Grid3,
+    psi: &mut Grid3,
+    weights: &mut [f32],
+    unknown: &[bool],
+    h: f64,
+) {
+    keep_known_wall(
+        closed_input,
+        cap_faces,
+        balls,
+        intact_lumen,
+        phi0,
+        psi,
+        weights,
+        h,
+    );
+    psi.data_mut()
+        .par_iter_mut()
+        .zip(phi0.data().par_iter())
+        .for_each(|(v, &k)| *v = v.min(k));
+    blend_known(psi, phi0, weights);
+    remove_islands(psi, unknown);
 }
 
 /// The largest inside distance of `phi0` over the nodes outside D within `reach` of it (`depth`

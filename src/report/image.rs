@@ -87,6 +87,9 @@ fn encode_png(image: &RgbImage, out: &mut dyn std::io::Write, path: &Path) -> Re
     let mut encoder = png::Encoder::new(out, image.width, image.height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
+    // fdeflate's PNG-tuned compression: on a repair's picture (1200 × 800) about 5 ms where
+    // zlib's default level took about 25 ms, for a file 1.7 times as large (270 kB, not 160 kB).
+    encoder.set_compression(png::Compression::Fast);
     let fail = |e: png::EncodingError| match e {
         png::EncodingError::IoError(e) => Error::io(path, e),
         other => Error::format(path, format!("cannot encode PNG: {other}")),
