@@ -465,19 +465,19 @@ fn real_coronary_stenosis_gets_a_tube_like_lumen_and_a_degree() {
     assert!(mesh_info(&r.mesh).watertight);
     assert_manifold3d(&r.mesh);
     assert_outside_kept(&r.closed_input, &r.mesh, &[ball]);
-    let measure = |windings| {
+    let measure = |measured| {
         vesselmsr::report::repair_report::region_reports(
             &r.closed_input,
             &r.mesh,
             &[ball],
             &["region".into()],
             None,
-            windings,
+            measured,
         )
     };
-    // The winding numbers the self-checks built measure what fresh ones do.
-    let (win_in, win_out) = r.windings.as_ref().expect("the stitch was checked");
-    let reports = measure(Some([win_in, win_out]));
+    // The winding numbers and volumes the self-checks measured are what fresh ones give.
+    let (m_in, m_out) = r.measured.as_ref().expect("the stitch was checked");
+    let reports = measure(Some([m_in, m_out]));
     assert_eq!(reports, measure(None));
     let g = &reports[0];
     println!(

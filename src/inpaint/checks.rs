@@ -21,6 +21,7 @@ use super::region::{depth_in, Ball};
 use crate::bvh::{WindingNumber, WindingOptions};
 use crate::mesh::measures::{mean_edge_length, signed_volume};
 use crate::mesh::topology::connected_components;
+use crate::report::repair_report::Measured;
 use crate::report::stenosis::volume_in_ball_with;
 use crate::TriMesh;
 use nalgebra::Point3;
@@ -61,12 +62,10 @@ pub struct RepairChecks<'a> {
     /// The input's mean edge and its longest edge near D, world units.
     mean: f64,
     longest_near: f64,
-    /// The input's volume inside each ball.
-    input_volumes: Vec<f64>,
     /// The input's connected pieces.
     input_pieces: usize,
-    /// The input's fast winding number (the report measures with it again).
-    input_winding: WindingNumber,
+    /// The input's fast winding number and volume inside each ball (the report reads them).
+    input: Measured,
 }
 
 impl<'a> RepairChecks<'a> {
@@ -89,32 +88,27 @@ impl<'a> RepairChecks<'a> {
                 }
             }
         }
-        let winding = WindingNumber::new(input, WindingOptions::SIDES);
         RepairChecks {
             balls,
             reach,
             input_edges,
             mean: mean_edge_length(input),
             longest_near,
-            input_volumes: balls
-                .iter()
-                .map(|b| volume_in_ball_with(input, &winding, b))
-                .collect(),
-            input_winding: winding,
             input_pieces: connected_components(input).0,
+            input: Measured::new(input, balls),
         }
     }
 
-    /// The input's fast winding number (`WindingOptions::SIDES`), built once by
-    /// [`RepairChecks::new`].
-    pub fn into_input_winding(self) -> WindingNumber {
-        self.input_winding
+    /// The input's fast winding number (`WindingOptions::SIDES`) and volume in each ball, measured
+    /// once by [`RepairChecks::new`].
+    pub fn into_input(self) -> Measured {
+        self.input
     }
 
     /// Checks `output` (the repaired, closed surface). Err names the first check that failed;
-    /// Ok gives the output's fast winding number (`WindingOptions::SIDES`), which the checks
-    /// build.
-    pub fn check(&self, output: &TriMesh) -> Result<WindingNumber, String> {
+    /// Ok gives the output's fast winding number (`WindingOptions::SIDES`) and volume in each
+    /// ball, which the checks measure.
+    pub fn check(&self, output: &TriMesh) -> Result<Measured, String> {
         let (mean, longest_near) = (self.mean, self.longest_near);
         let volume = signed_volume(output);
         if !(volume > 0.0) {
@@ -176,7 +170,8 @@ impl<'a> RepairChecks<'a> {
                 self.input_pieces
             ));
         }
-        for (k, (ball, &before)) in self.balls.iter().zip(&self.input_volumes).enumerate() {
+        let mut volumes = Vec::with_capacity(self.balls.len());
+        for (k, (ball, &before)) in self.balls.iter().zip(&self.input.volumes).enumerate() {
             let after = volume_in_ball_with(output, &winding, ball);
             if after < before - 1e-3 * before.abs().max(ball.radius.powi(3)) {
                 return Err(format!(
@@ -184,8 +179,9 @@ impl<'a> RepairChecks<'a> {
                     k + 1
                 ));
             }
+            volumes.push(after);
         }
-        Ok(winding)
+        Ok(Measured { winding, volumes })
     }
 }
 

@@ -376,8 +376,8 @@ fn repair_traced(
                 },
             );
             result.mesh = lean;
-            // The output's winding number was the undecimated mesh's.
-            result.windings = None;
+            // The output's winding number and volumes were the undecimated mesh's.
+            result.measured = None;
             Some(done)
         }
         _ => None,
@@ -390,7 +390,7 @@ fn repair_traced(
         &balls,
         &sources,
         healthy,
-        result.windings.as_ref().map(|(i, o)| [i, o]),
+        result.measured.as_ref().map(|(i, o)| [i, o]),
     );
     for (region, &fill) in regions.iter_mut().zip(&result.region_fill) {
         region.fill = Some(fill);
@@ -499,6 +499,6 @@ fn unrepaired(mesh: &TriMesh, opts: &RepairOptions) -> Result<Repair> {
         region_fill: Vec::new(),
         notices: Vec::new(),
         timings: vec![("cap".into(), start.elapsed().as_secs_f64())],
-        windings: None,
+        measured: None,
     })
 }

@@ -38,7 +38,7 @@ use super::region::{deepest_ball, Ball};
 use super::shave::shave_bumps;
 use super::stitch::{cut_out, stitch_patch_checked, without_specks, CutOut};
 use super::topology::remove_islands;
-use crate::bvh::{MeshBvh, WindingNumber};
+use crate::bvh::MeshBvh;
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
 use crate::centerline::{compute_centerline, CenterlineOptions};
@@ -52,6 +52,7 @@ use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
 use crate::mesh::units::typical_vessel_radius;
 use crate::motion::{Flow, FlowOptions, Velocity};
+use crate::report::repair_report::Measured;
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
@@ -245,10 +246,10 @@ pub struct Repair {
     pub notices: Vec<String>,
     /// Seconds per phase.
     pub timings: Vec<(String, f64)>,
-    /// The fast winding numbers (`WindingOptions::SIDES`) of `closed_input` and `mesh` that the
-    /// self-checks built, for the report to measure with; `None` where no check ran (re-meshed
-    /// whole, ends kept open).
-    pub windings: Option<(WindingNumber, WindingNumber)>,
+    /// The fast winding numbers (`WindingOptions::SIDES`) of `closed_input` and `mesh` and their
+    /// volumes in each ball, which the self-checks measured, for the report to read; `None` where
+    /// no check ran (re-meshed whole, ends kept open).
+    pub measured: Option<(Measured, Measured)>,
 }
 
 /// The default voxel of the curvature-motion methods (flow, msr, paper): the typical vessel
@@ -808,12 +809,10 @@ pub(crate) fn repair_awaiting<'h>(
         })
     });
     let stitched = matches!(stitch, Some(Ok(_)));
-    let mut windings = None;
+    let mut measured = None;
     let (mesh_out, fallback) = match stitch {
-        Some(Ok((m, output_winding))) => {
-            windings = checks
-                .map(RepairChecks::into_input_winding)
-                .zip(output_winding);
+        Some(Ok((m, output_measured))) => {
+            measured = checks.map(RepairChecks::into_input).zip(output_measured);
             (m, None)
         }
         other => (
@@ -857,7 +856,7 @@ pub(crate) fn repair_awaiting<'h>(
         region_fill,
         notices,
         timings,
-        windings,
+        measured,
     })
 }
 

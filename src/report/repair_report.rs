@@ -219,34 +219,56 @@ pub fn is_stenosis_source(source: &str) -> bool {
     source == DETECTED_STENOSIS || source == PICKED_STENOSIS
 }
 
+/// A surface's fast winding number (`WindingOptions::SIDES`) and the volume it holds in each
+/// ball of D ([`volume_in_ball_with`] with that winding number), measured once: the repair's
+/// self-checks measure them, and the report reads them instead of measuring them again.
+#[derive(Debug, Clone)]
+pub struct Measured {
+    pub winding: WindingNumber,
+    pub volumes: Vec<f64>,
+}
+
+impl Measured {
+    /// `mesh`'s winding number and its volume in each of `balls`.
+    pub fn new(mesh: &TriMesh, balls: &[Ball]) -> Self {
+        let winding = WindingNumber::new(mesh, WindingOptions::SIDES);
+        Measured {
+            volumes: balls
+                .iter()
+                .map(|b| volume_in_ball_with(mesh, &winding, b))
+                .collect(),
+            winding,
+        }
+    }
+}
+
 /// The per-region figures for `balls` (with their `sources`), `input` being the measured input
 /// (capped) and `output` the repaired mesh; the stenosis along `healthy` (the input's centreline)
-/// where it has measured points in the region, else across the region's sections. `windings`:
-/// the input's and output's fast winding numbers (`WindingOptions::SIDES`) when already built.
+/// where it has measured points in the region, else across the region's sections. `measured`:
+/// the input's and output's winding numbers and volumes in `balls` when already measured.
 pub fn region_reports(
     input: &TriMesh,
     output: &TriMesh,
     balls: &[Ball],
     sources: &[String],
     healthy: Option<&HealthyVessel>,
-    windings: Option<[&WindingNumber; 2]>,
+    measured: Option<[&Measured; 2]>,
 ) -> Vec<RegionReport> {
-    let opts = WindingOptions::SIDES;
     let built;
-    let [win_in, win_out] = match windings {
-        Some(w) => w,
-        None => {
-            built = [input, output].map(|m| WindingNumber::new(m, opts));
+    let [m_in, m_out] = match measured {
+        Some(m) if m.iter().all(|m| m.volumes.len() == balls.len()) => m,
+        _ => {
+            built = [input, output].map(|m| Measured::new(m, balls));
             [&built[0], &built[1]]
         }
     };
+    let (win_in, win_out) = (&m_in.winding, &m_out.winding);
     let total = signed_volume(output);
     balls
         .iter()
         .enumerate()
         .map(|(k, ball)| {
-            let vin = volume_in_ball_with(input, win_in, ball);
-            let vout = volume_in_ball_with(output, win_out, ball);
+            let (vin, vout) = (m_in.volumes[k], m_out.volumes[k]);
             // A narrowing's region (found by `--stenoses` or picked) is measured at its own
             // narrowest point, the ball's centre (within a third of the ball's radius, half a
             // healthy radius at least), not at the deepest narrowing the ball reaches: its ball
