@@ -19,13 +19,15 @@ pub fn chamfer_inside(phi: &mut Grid3, clamp: f64) {
     let h = phi.voxel() as f32;
     let clamp = clamp as f32;
     let data = phi.data_mut();
-    // Work on the depth d = −φ of the clamped inside nodes; +∞ marks the ones to compute.
-    let free: Vec<bool> = data.iter().map(|&v| v <= -clamp).collect();
-    let mut d: Vec<f32> = data
-        .iter()
-        .zip(&free)
-        .map(|(&v, &f)| if f { f32::INFINITY } else { -v })
-        .collect();
+    // The clamped inside nodes, in the grid's order: the sweeps visit these only (on a long thin
+    // vessel in a large box, a small part of the grid), forward in that order and backward in
+    // its reverse, as full raster sweeps would change them. They hold −∞ (a depth of +∞: not
+    // reached yet) until relaxed; the depth of any node is −φ.
+    let free: Vec<usize> = (0..data.len()).filter(|&n| data[n] <= -clamp).collect();
+    let clamped: Vec<f32> = free.iter().map(|&n| data[n]).collect();
+    for &n in &free {
+        data[n] = f32::NEG_INFINITY;
+    }
     let (sy, sz) = (nx, nx * ny);
     // The 13 neighbours that come before a node in x-fastest order, with their lengths.
     let mut back: Vec<([isize; 3], f32)> = Vec::with_capacity(13);
@@ -40,12 +42,9 @@ pub fn chamfer_inside(phi: &mut Grid3, clamp: f64) {
             }
         }
     }
-    let relax = |d: &mut [f32], i: usize, j: usize, k: usize, sign: isize| {
-        let n = i + j * sy + k * sz;
-        if !free[n] {
-            return;
-        }
-        let mut best = d[n];
+    let relax = |data: &mut [f32], n: usize, sign: isize| {
+        let (i, j, k) = (n % sy, (n / sy) % ny, n / sz);
+        let mut best = -data[n];
         for &([dx, dy, dz], len) in &back {
             let (a, b, c) = (
                 i as isize + sign * dx,
@@ -57,30 +56,23 @@ pub fn chamfer_inside(phi: &mut Grid3, clamp: f64) {
             }
             let m = a as usize + b as usize * sy + c as usize * sz;
             // Only inside nodes carry a depth (an outside node's −φ is negative).
-            let dm = d[m];
+            let dm = -data[m];
             if dm >= 0.0 && dm + len < best {
                 best = dm + len;
             }
         }
-        d[n] = best;
+        data[n] = -best;
     };
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                relax(&mut d, i, j, k, 1);
-            }
-        }
+    for &n in &free {
+        relax(data, n, 1);
     }
-    for k in (0..nz).rev() {
-        for j in (0..ny).rev() {
-            for i in (0..nx).rev() {
-                relax(&mut d, i, j, k, -1);
-            }
-        }
+    for &n in free.iter().rev() {
+        relax(data, n, -1);
     }
-    for ((v, &f), &dv) in data.iter_mut().zip(&free).zip(&d) {
-        if f && dv.is_finite() {
-            *v = -dv;
+    // A node no sweep reached (an inside pocket with no band) keeps its clamped value.
+    for (&n, &v) in free.iter().zip(&clamped) {
+        if !data[n].is_finite() {
+            data[n] = v;
         }
     }
 }
