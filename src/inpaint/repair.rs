@@ -300,11 +300,13 @@ const PATCH_COARSE_RADIUS_VOXELS: f64 = 12.0;
 
 /// Every how many nodes of the fill's grid (voxel `h`) its surface is meshed for the patch: 2
 /// where the vessel's radius `r` is [`PATCH_COARSE_RADIUS_VOXELS`] voxels or more and 2h is no
-/// longer than the input's `mean_edge` (the default voxel is half of it), else 1. The fill needs
-/// the fine grid; its surface, not always: at the default voxel the patch was four times as dense
-/// as the input (on the aneurysm's slowest chop of `benches/repair_real`, 55,000 of the output's
-/// 64,000 triangles), and what follows the fill (the stitch, the self-checks' and the report's
-/// winding numbers, the picture) scales with it. Measured on the 105 chops of that bench's seeds
+/// longer than the input's `mean_edge` (the default voxel is half of it), else 1. The fill itself
+/// needs the fine grid (its tubes, a junction's shave); its surface does not always, nor does
+/// what follows the fill node by node (the known wall, the union, the blend and the islands run
+/// on the patch's nodes only: `finish_fill`). At the default voxel the patch was four times as
+/// dense as the input (on the aneurysm's slowest chop of `benches/repair_real`, 55,000 of the
+/// output's 64,000 triangles), and what is done with it (the stitch, the self-checks' and the
+/// report's winding numbers, the picture) scales with it. Measured on the 105 chops of that bench's seeds
 /// 21–27 with every patch meshed at 2h: the volume in D 0.0–0.1% lower at R ≥ 22h, 0.2–0.4% at
 /// 12–16h, 0.4–1.0% at 8–10h and 0.8–2.2% at 4–7h (chords across a curved wall), the Hausdorff
 /// distance within 0.13h of the fine patch's from 12h up (+0.18h at most below).
@@ -702,7 +704,7 @@ pub(crate) fn repair_awaiting<'h>(
     // blend into φ_0, the islands), and the patch is meshed on every `patch_stride`-th node: for
     // the centreline and axial fills, on those nodes only (the same values there; an eighth of
     // the work at a stride of 2), the fine field being finished only for the whole-vessel
-    // re-mesh. The flows' fields are redistanced on the fine grid first.
+    // re-mesh. The motions' fields, redistanced afterwards, are finished on the fine grid.
     let patch_stride = patch_stride(radius_estimate, h, mean_edge);
     let finish = |phi0: &Grid3, mut psi: Grid3, mut weights: Vec<f32>, unknown: &[bool]| {
         finish_fill(
