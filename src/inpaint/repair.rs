@@ -306,10 +306,10 @@ const PATCH_COARSE_RADIUS_VOXELS: f64 = 12.0;
 /// on the patch's nodes only: `finish_fill`). At the default voxel the patch was four times as
 /// dense as the input (on the aneurysm's slowest chop of `benches/repair_real`, 55,000 of the
 /// output's 64,000 triangles), and what is done with it (the stitch, the self-checks' and the
-/// report's winding numbers, the picture) scales with it. Measured on the 105 chops of that bench's seeds
-/// 21–27 with every patch meshed at 2h: the volume in D 0.0–0.1% lower at R ≥ 22h, 0.2–0.4% at
-/// 12–16h, 0.4–1.0% at 8–10h and 0.8–2.2% at 4–7h (chords across a curved wall), the Hausdorff
-/// distance within 0.13h of the fine patch's from 12h up (+0.18h at most below).
+/// report's winding numbers, the picture) scales with it. Measured on the 105 chops of that
+/// bench's seeds 21–27 with every patch meshed at 2h: the volume in D 0.0–0.1% lower at R ≥ 22h,
+/// 0.2–0.4% at 12–16h, 0.4–1.0% at 8–10h and 0.8–2.2% at 4–7h (chords across a curved wall), the
+/// Hausdorff distance within 0.13h of the fine patch's from 12h up (+0.18h at most below).
 pub fn patch_stride(r: f64, h: f64, mean_edge: f64) -> usize {
     let coarse = 2.0 * h;
     if r >= PATCH_COARSE_RADIUS_VOXELS * h && coarse <= mean_edge * (1.0 + 1e-9) {
