@@ -38,7 +38,7 @@ use super::region::{deepest_ball, Ball};
 use super::shave::shave_bumps;
 use super::stitch::{cut_out, stitch_patch_checked, without_specks, CutOut};
 use super::topology::remove_islands;
-use crate::bvh::MeshBvh;
+use crate::bvh::{closest_point_on_triangle, MeshBvh};
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
 use crate::centerline::{compute_centerline, CenterlineOptions};
@@ -516,7 +516,12 @@ pub(crate) fn repair_awaiting<'h>(
     let centreline_bvh =
         matches!(opts.method, InpaintMethod::Centerline).then(|| MeshBvh::new(&closed_input));
     let radius_estimate = match &centreline_bvh {
-        Some(bvh) => shell_radius(&phi0, &depth, AXIAL_CORE_VOXELS * h, Some(bvh)),
+        Some(bvh) => shell_radius(
+            &phi0,
+            &depth,
+            AXIAL_CORE_VOXELS * h,
+            Some((&closed_input, bvh)),
+        ),
         None => shell_radius(&phi0, &depth, rmax.max(3.0 * h), None),
     }
     .max(h);
@@ -900,9 +905,16 @@ fn finish_fill(
 }
 
 /// The largest inside distance of `phi0` over the nodes outside D within `reach` of it (`depth`
-/// in (−reach, 0]). With `exact` (the input's hierarchy), a node that holds the voxelizer's
-/// placeholder (−band·h, beyond its band) is measured to the input instead.
-fn shell_radius(phi0: &Grid3, depth: &[f32], reach: f64, exact: Option<&MeshBvh>) -> f64 {
+/// in (−reach, 0]). With `exact` (the input and its hierarchy), a node that holds the voxelizer's
+/// placeholder (−band·h, beyond its band) is measured to the input instead: its distance is at
+/// most that to the previous such node's nearest triangle, which bounds the query, and a node
+/// that bound shows cannot exceed the largest so far is not measured (the same maximum).
+fn shell_radius(
+    phi0: &Grid3,
+    depth: &[f32],
+    reach: f64,
+    exact: Option<(&TriMesh, &MeshBvh)>,
+) -> f64 {
     let placeholder = (VoxelizeOptions::default().band * phi0.voxel()) as f32;
     let reach = reach as f32;
     phi0.data()
@@ -910,13 +922,29 @@ fn shell_radius(phi0: &Grid3, depth: &[f32], reach: f64, exact: Option<&MeshBvh>
         .zip(depth.par_iter())
         .enumerate()
         .filter(|(_, (_, &d))| d <= 0.0 && d > -reach)
-        .map(|(n, (&v, _))| match exact {
-            Some(bvh) if v <= -placeholder * (1.0 - 1e-6) => {
-                let [i, j, k] = phi0.coords(n);
-                bvh.closest_point(&phi0.world(i, j, k)).distance
-            }
-            _ => -v as f64,
-        })
+        .fold(
+            || (0.0_f64, None::<u32>),
+            |(largest, hint), (n, (&v, _))| match exact {
+                Some((mesh, bvh)) if v <= -placeholder * (1.0 - 1e-6) => {
+                    let [i, j, k] = phi0.coords(n);
+                    let p = phi0.world(i, j, k);
+                    let bound = hint.map(|f| {
+                        let [a, b, c] = mesh.triangle(f as usize);
+                        (p - closest_point_on_triangle(&p, &a, &b, &c).0).norm()
+                    });
+                    if bound.is_some_and(|b| b <= largest) {
+                        return (largest, hint);
+                    }
+                    let q = bound
+                        .and_then(|b| bvh.closest_point_within(&p, b * (1.0 + 1e-9)))
+                        .unwrap_or_else(|| bvh.closest_point(&p));
+                    let hint = q.is_found().then_some(q.face).or(hint);
+                    (largest.max(q.distance), hint)
+                }
+                _ => (largest.max(-v as f64), hint),
+            },
+        )
+        .map(|(largest, _)| largest)
         .reduce(|| 0.0, f64::max)
 }
 
