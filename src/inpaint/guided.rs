@@ -1059,13 +1059,15 @@ fn cut_end_in_rim(rim: &[Point3<f64>], widest: f64, bvh: &MeshBvh) -> Option<Anc
         let side = |n: Vector3<f64>| rim.iter().all(|p| (p - a).dot(&n) <= tol).then_some(n);
         side(*normal).or_else(|| side(-normal))
     })?;
-    let (point, radius) = circle_in_plane(&arc, &out, &on)?;
-    let sized = (widest / 3.0..=1.5 * widest).contains(&radius);
+    // The tests in order of cost: the circle's size, the run (quadratic in the rim's points),
+    // the winding number's ray.
+    let (point, radius) = circle_in_plane(&arc, &out, &on)
+        .filter(|(_, radius)| (widest / 3.0..=1.5 * widest).contains(radius))?;
     // A cut's rim is a run of the rim's own points: along the arc (the circle less its widest
     // gap, the part the damage took), no gap wider than three of the rim's spacings (points that
     // only happen to lie on one plane are scattered along it: on the rippled tube's hole of
     // `tests/inpaint_repair.rs`, 15 of them with a gap of 12 spacings; the aneurysm's bitten
-    // ends, 1.2 spacings).
+    // ends, 1.2 spacings). The gaps do not depend on the in-plane axes the angles are read from.
     let e1 = any_perpendicular(&out);
     let e2 = out.cross(&e1);
     let mut angles: Vec<f64> = arc
@@ -1077,8 +1079,8 @@ fn cut_end_in_rim(rim: &[Point3<f64>], widest: f64, bvh: &MeshBvh) -> Option<Anc
     gaps.push(TAU - (angles[angles.len() - 1] - angles[0]));
     gaps.sort_by(f64::total_cmp);
     let run = gaps[gaps.len() - 2] * radius <= 3.0 * median_spacing(rim);
-    let ends = bvh.winding_number_by_rays(&(point + out * (0.5 * radius))) == Some(0);
-    (sized && run && ends).then_some(Anchor {
+    let ends = || bvh.winding_number_by_rays(&(point + out * (0.5 * radius))) == Some(0);
+    (run && ends()).then_some(Anchor {
         point,
         into: -out,
         radius,
