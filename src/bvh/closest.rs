@@ -224,6 +224,14 @@ fn closest_by_regions(
     (a + ab * v + ac * w, [1.0 - v - w, v, w])
 }
 
+/// A bound on the distance from `p` to a mesh holding the triangle `tri`: the distance to that
+/// triangle, grown by a billionth so rounding never makes it too small (for
+/// [`MeshBvh::closest_point_bounded`]).
+pub fn bound_by_triangle(p: &Point3<f64>, tri: &[Point3<f64>; 3]) -> f64 {
+    let [a, b, c] = tri;
+    (p - closest_point_on_triangle(p, a, b, c).0).norm() * (1.0 + 1e-9)
+}
+
 /// sin² of the angle at the first corner below which a triangle is also checked against its edges.
 const SLIVER: f64 = 1e-6;
 
@@ -309,6 +317,15 @@ impl MeshBvh {
             face: self.face_ids[slot],
             bary,
         })
+    }
+
+    /// [`MeshBvh::closest_point`] with a bound on its distance known beforehand (world units;
+    /// `None`: no bound): the same answer, found opening fewer boxes when the bound is tight, as
+    /// the distance to a neighbouring query's nearest triangle is ([`bound_by_triangle`]).
+    pub fn closest_point_bounded(&self, p: &Point3<f64>, bound: Option<f64>) -> ClosestPoint {
+        bound
+            .and_then(|r| self.closest_point_within(p, r))
+            .unwrap_or_else(|| self.closest_point(p))
     }
 
     /// [`MeshBvh::closest_point`] for many points, in parallel (rayon).

@@ -9,7 +9,7 @@ mod ray;
 mod tri_bvh;
 mod winding;
 
-pub use closest::{closest_point_on_triangle, ClosestPoint, TrianglePoints};
+pub use closest::{bound_by_triangle, closest_point_on_triangle, ClosestPoint, TrianglePoints};
 pub use ray::{intersect_ray_triangle, RayHit};
 pub use tri_bvh::MeshBvh;
 pub use winding::{solid_angle, WindingNumber, WindingOptions};

@@ -19,7 +19,7 @@
 //! `benches/repair_real`, was left as narrow as it came, 7.3h / −33% in D).
 
 use super::region::Ball;
-use crate::bvh::{closest_point_on_triangle, MeshBvh};
+use crate::bvh::{bound_by_triangle, MeshBvh};
 use crate::grid::Grid3;
 use crate::TriMesh;
 use nalgebra::{Point3, Vector3};
@@ -92,13 +92,8 @@ pub fn keep_known_wall(
                 }
                 // Bounded by the distance to the previous node's nearest triangle (the same
                 // answer, found opening far fewer boxes: neighbouring nodes share their walls).
-                let q = hint
-                    .and_then(|f| {
-                        let [a, b, c] = wall.triangle(f as usize);
-                        let (x, _) = closest_point_on_triangle(&p, &a, &b, &c);
-                        wall_bvh.closest_point_within(&p, (p - x).norm() * (1.0 + 1e-9))
-                    })
-                    .unwrap_or_else(|| wall_bvh.closest_point(&p));
+                let bound = hint.map(|f| bound_by_triangle(&p, &wall.triangle(f as usize)));
+                let q = wall_bvh.closest_point_bounded(&p, bound);
                 if !q.is_found() {
                     continue;
                 }

@@ -38,7 +38,7 @@ use super::region::{deepest_ball, Ball};
 use super::shave::shave_bumps;
 use super::stitch::{cut_out, stitch_patch_checked, without_specks, CutOut};
 use super::topology::remove_islands;
-use crate::bvh::{closest_point_on_triangle, MeshBvh};
+use crate::bvh::{bound_by_triangle, MeshBvh};
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
 use crate::centerline::{compute_centerline, CenterlineOptions};
@@ -928,16 +928,11 @@ fn shell_radius(
                 Some((mesh, bvh)) if v <= -placeholder * (1.0 - 1e-6) => {
                     let [i, j, k] = phi0.coords(n);
                     let p = phi0.world(i, j, k);
-                    let bound = hint.map(|f| {
-                        let [a, b, c] = mesh.triangle(f as usize);
-                        (p - closest_point_on_triangle(&p, &a, &b, &c).0).norm()
-                    });
+                    let bound = hint.map(|f| bound_by_triangle(&p, &mesh.triangle(f as usize)));
                     if bound.is_some_and(|b| b <= largest) {
                         return (largest, hint);
                     }
-                    let q = bound
-                        .and_then(|b| bvh.closest_point_within(&p, b * (1.0 + 1e-9)))
-                        .unwrap_or_else(|| bvh.closest_point(&p));
+                    let q = bvh.closest_point_bounded(&p, bound);
                     let hint = q.is_found().then_some(q.face).or(hint);
                     (largest.max(q.distance), hint)
                 }

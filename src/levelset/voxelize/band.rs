@@ -5,7 +5,7 @@
 //! if it lies in the triangle's bounding box grown by the band and in the slab of half-width
 //! `band` about the triangle's plane (each grid row meets that slab in one interval of nodes).
 //! At each such node the distance to the triangle is computed in f64 by the hierarchy's own
-//! point–triangle routine ([`closest_point_on_triangle`]) and the smallest is kept, so a band
+//! point–triangle routine ([`crate::bvh::closest_point_on_triangle`]) and the smallest is kept, so a band
 //! value is the minimum over every triangle within the band: exactly what
 //! [`MeshBvh::closest_point_within`]`(p, band)` returns, at a fraction of the cost of one
 //! hierarchy query per node (each node meets a few dozen triangles). The work is split over
@@ -18,7 +18,7 @@ use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
 use super::{Layout, BAND};
-use crate::bvh::{closest_point_on_triangle, MeshBvh, TrianglePoints};
+use crate::bvh::{bound_by_triangle, MeshBvh, TrianglePoints};
 use crate::TriMesh;
 
 /// A triangle's footprint on the grid: node ranges of its grown box and its plane.
@@ -202,17 +202,11 @@ pub(super) fn far_distances(mesh: &TriMesh, bvh: &MeshBvh, layout: &Layout, dist
             }
             let p: Point3<f64> = layout.world(i, jj, k);
             let bound = match (hint, prev) {
-                (Some(f), _) => {
-                    let [a, b, c] = mesh.triangle(f as usize);
-                    let (x, _) = closest_point_on_triangle(&p, &a, &b, &c);
-                    Some((p - x).norm() * (1.0 + 1e-9))
-                }
+                (Some(f), _) => Some(bound_by_triangle(&p, &mesh.triangle(f as usize))),
                 (None, Some(pd)) => Some((pd + h) * (1.0 + 1e-6)),
                 (None, None) => None,
             };
-            let cp = bound
-                .and_then(|r| bvh.closest_point_within(&p, r))
-                .unwrap_or_else(|| bvh.closest_point(&p));
+            let cp = bvh.closest_point_bounded(&p, bound);
             *di = cp.distance as f32;
             prev = Some(cp.distance);
             hint = Some(cp.face);
