@@ -11,7 +11,9 @@
 //! - **In no more pieces than the input.** A piece of the patch apart from the vessel (a speck
 //!   of the grid, a blob in the lumen's outside) is no part of a repair.
 //! - **Outward, and nothing taken away.** The enclosed volume is positive, and the volume in each
-//!   ball of D is at least the input's (the damage is missing volume: a repair only adds).
+//!   ball of D is at least the input's (the damage is missing volume: a repair only adds), less
+//!   what only a hole's cap held outside the vessel, which the fill does not keep
+//!   ([`RepairChecks::allowing`]).
 //!
 //! `repair` runs them on the stitched surface and, when one fails, re-meshes the whole vessel
 //! instead, saying why (paper Section 4 ends Algorithm 4 by re-meshing; the stitch that keeps the
@@ -66,6 +68,8 @@ pub struct RepairChecks<'a> {
     input_pieces: usize,
     /// The input's fast winding number and volume inside each ball (the report reads them).
     input: Measured,
+    /// Per ball, the volume the output may hold less than the input, world units³.
+    allowed_loss: Vec<f64>,
 }
 
 impl<'a> RepairChecks<'a> {
@@ -96,7 +100,17 @@ impl<'a> RepairChecks<'a> {
             longest_near,
             input_pieces: connected_components(input).0,
             input: Measured::new(input, balls),
+            allowed_loss: Vec::new(),
         }
+    }
+
+    /// The checks allowing, per ball, for `cap_outside` (world units³): the volume of the capped
+    /// input that only a hole's cap held outside the vessel, which the fill did not keep
+    /// (`Repair::cap_outside`). That volume is estimated by the fill grid's cells, so twice it
+    /// may be missing from the output in the ball.
+    pub fn allowing(mut self, cap_outside: &[f64]) -> Self {
+        self.allowed_loss = cap_outside.iter().map(|v| 2.0 * v.max(0.0)).collect();
+        self
     }
 
     /// The input's fast winding number (`WindingOptions::SIDES`) and volume in each ball, measured
@@ -173,7 +187,8 @@ impl<'a> RepairChecks<'a> {
         let mut volumes = Vec::with_capacity(self.balls.len());
         for (k, (ball, &before)) in self.balls.iter().zip(&self.input.volumes).enumerate() {
             let after = volume_in_ball_with(output, &winding, ball);
-            if after < before - 1e-3 * before.abs().max(ball.radius.powi(3)) {
+            let allowed = self.allowed_loss.get(k).copied().unwrap_or(0.0);
+            if after < before - allowed - 1e-3 * before.abs().max(ball.radius.powi(3)) {
                 return Err(format!(
                     "region {} holds less volume after the repair ({after:.4}) than before ({before:.4})",
                     k + 1

@@ -29,12 +29,14 @@ use crate::centerline::{compute_centerline, CenterlineOptions};
 use crate::mesh::cap::{cap_holes, CapOptions};
 use crate::mesh::decimate::{decimate_mesh, DecimateOptions};
 use crate::mesh::info::mesh_info;
+use crate::mesh::measures::signed_volume;
 use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
 use crate::mesh::units::{check_vessel_scale, VesselScaleOptions};
 use crate::report::repair_report::{
-    is_stenosis_source, modelled_junction, region_reports, surface_measures, unrestored_narrowing,
-    LoopReport, MeshPart, RepairParameters, RepairReport, DETECTED_STENOSIS, PICKED_STENOSIS,
+    discount_cap_outside, is_stenosis_source, modelled_junction, region_reports, surface_measures,
+    unrestored_narrowing, LoopReport, MeshPart, RepairParameters, RepairReport, DETECTED_STENOSIS,
+    PICKED_STENOSIS,
 };
 use crate::{Error, Result, TriMesh};
 use std::path::PathBuf;
@@ -395,6 +397,13 @@ fn repair_traced(
     for (region, &fill) in regions.iter_mut().zip(&result.region_fill) {
         region.fill = Some(fill);
     }
+    // What only a hole's cap held outside the vessel is no volume of the input's.
+    let output_volume = signed_volume(&result.mesh);
+    for (k, (region, &outside)) in regions.iter_mut().zip(&result.cap_outside).enumerate() {
+        if let Some(notice) = discount_cap_outside(k + 1, region, outside, output_volume) {
+            result.notices.push(notice);
+        }
+    }
     // A narrowing left narrowed, a junction's shape estimated: no silent failure.
     for (k, region) in regions.iter().enumerate() {
         let notices = [
@@ -500,5 +509,6 @@ fn unrepaired(mesh: &TriMesh, opts: &RepairOptions) -> Result<Repair> {
         notices: Vec::new(),
         timings: vec![("cap".into(), start.elapsed().as_secs_f64())],
         measured: None,
+        cap_outside: Vec::new(),
     })
 }

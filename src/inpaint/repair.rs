@@ -30,7 +30,7 @@ use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::checks::RepairChecks;
 use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions, HoleCaps, JUNCTION_FILL};
 use super::junction::{fill_junction, Branch};
-use super::known_wall::{hole_balls, hole_rims, keep_known_wall, rim_points};
+use super::known_wall::{cap_only_nodes, hole_balls, hole_rims, keep_known_wall, rim_points};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{fill_msr, MsrFillOptions};
 use super::paper::{fill_paper, PaperOptions, DT_VOXELS2};
@@ -250,6 +250,11 @@ pub struct Repair {
     /// volumes in each ball, which the self-checks measured, for the report to read; `None` where
     /// no check ran (re-meshed whole, ends kept open).
     pub measured: Option<(Measured, Measured)>,
+    /// Per ball of D, the volume of the capped input that lies outside the repaired vessel, held
+    /// only by a hole's cap (a cap across a bifurcation's crotch; `known_wall::cap_only_nodes`),
+    /// estimated by the fill grid's cells, world units³: the repair does not keep it, and the
+    /// input's volume in D is counted without it.
+    pub cap_outside: Vec<f64>,
 }
 
 /// The default voxel of the curvature-motion methods (flow, msr, paper): the typical vessel
@@ -714,7 +719,7 @@ pub(crate) fn repair_awaiting<'h>(
     // fields, redistanced afterwards, are finished on the fine grid.
     let patch_stride = patch_stride(radius_estimate, h, mean_edge);
     let finish = |phi0: &Grid3, mut psi: Grid3, mut weights: Vec<f32>, unknown: &[bool]| {
-        finish_fill(
+        let cap_outside = finish_fill(
             &closed_input,
             cap_faces.clone(),
             balls,
@@ -737,10 +742,10 @@ pub(crate) fn repair_awaiting<'h>(
                 },
             )?;
         }
-        Ok::<_, Error>(psi)
+        Ok::<_, Error>((psi, cap_outside))
     };
     let coarse = patch_stride > 1 && !opts.method.is_motion();
-    let (field, unfinished) = if coarse {
+    let ((field, mut cap_outside), unfinished) = if coarse {
         let nodes = |values: &[f32]| {
             Grid3::from_data(dims, transform, values.to_vec())
                 .and_then(|g| g.subsample(patch_stride))
@@ -776,7 +781,7 @@ pub(crate) fn repair_awaiting<'h>(
         },
         || {
             (opts.keep_outside && cut.open_edges == 0)
-                .then(|| RepairChecks::new(&closed_input, balls, 3.0 * h))
+                .then(|| RepairChecks::new(&closed_input, balls, 3.0 * h).allowing(&cap_outside))
         },
     );
     // Closed pieces smaller than one of its cells are the grid's noise, no part of the vessel.
@@ -827,7 +832,11 @@ pub(crate) fn repair_awaiting<'h>(
         other => (
             {
                 let fine = match unfinished {
-                    Some((psi, weights)) => finish(&phi0, psi, weights, &unknown)?,
+                    Some((psi, weights)) => {
+                        let (fine, fine_cap_outside) = finish(&phi0, psi, weights, &unknown)?;
+                        cap_outside = fine_cap_outside;
+                        fine
+                    }
                     None => field,
                 };
                 remesh_whole(&closed_input, &fine, &depth, origin, whole_dims, first, h)?
@@ -866,14 +875,18 @@ pub(crate) fn repair_awaiting<'h>(
         notices,
         timings,
         measured,
+        cap_outside,
     })
 }
 
 /// After the fill `psi` (on `phi0`'s grid, or on every few of its nodes): the intact wall around
 /// a hole kept (`keep_known_wall`: the fill acts in the hole's shadow only), the fill united with
 /// the input (the damage a repair is for, a chopped wall, a narrowing, an occlusion, is missing
-/// volume, so what the input has in D is kept), blended into φ_0 by `weights`, and the pieces
-/// floating in D (`unknown`) removed. `h` is the voxel of the input's grid.
+/// volume, so what the input has in D is kept) but for what only a hole's cap holds
+/// (`cap_only_nodes`: a cap across a crotch spans space outside the vessel), blended into φ_0 by
+/// `weights`, and the pieces floating in D (`unknown`) removed. `h` is the voxel of the input's
+/// grid. Returns, per ball, the volume of the capped input that the union left out (world
+/// units³).
 #[allow(clippy::too_many_arguments)]
 fn finish_fill(
     closed_input: &TriMesh,
@@ -885,10 +898,10 @@ fn finish_fill(
     weights: &mut [f32],
     unknown: &[bool],
     h: f64,
-) {
+) -> Vec<f64> {
     keep_known_wall(
         closed_input,
-        cap_faces,
+        cap_faces.clone(),
         balls,
         intact_lumen,
         phi0,
@@ -896,12 +909,20 @@ fn finish_fill(
         weights,
         h,
     );
+    let (cap_only, cap_outside) =
+        cap_only_nodes(closed_input, cap_faces, balls, intact_lumen, phi0, psi);
     psi.data_mut()
         .par_iter_mut()
         .zip(phi0.data().par_iter())
-        .for_each(|(v, &k)| *v = v.min(k));
+        .zip(cap_only.par_iter())
+        .for_each(|((v, &k), &cap)| {
+            if !cap {
+                *v = v.min(k);
+            }
+        });
     blend_known(psi, phi0, weights);
     remove_islands(psi, unknown);
+    cap_outside
 }
 
 /// The largest inside distance of `phi0` over the nodes outside D within `reach` of it (`depth`

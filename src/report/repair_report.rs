@@ -39,7 +39,9 @@ pub struct RegionReport {
     pub inpainted_volume: f64,
     /// `inpainted_volume` over the whole output volume.
     pub inpainted_fraction: f64,
-    /// Volume of the input inside D, world units³.
+    /// Volume of the input inside D, world units³: its holes' caps counted only inside the
+    /// repaired vessel (what a cap across a crotch holds outside it is left out:
+    /// [`discount_cap_outside`]).
     pub input_volume_in_region: f64,
     /// Volume of the output inside D, world units³.
     pub output_volume_in_region: f64,
@@ -193,6 +195,38 @@ pub fn unrestored_narrowing(k: usize, region: &RegionReport) -> Option<String> {
          picture, or give the region with --region",
         d(region.output_diameter_at_min),
         d(region.reference_diameter),
+    ))
+}
+
+/// Takes `outside` off the input's volume in region `k` (counted from 1): the capped input's
+/// volume there that only a hole's cap held, outside the repaired vessel (`Repair::cap_outside`,
+/// world units³), so that the inpainted volume counts from the input's own wall; `output_volume`
+/// is the whole output's, for the fraction. The notice saying so when `outside` is more than a
+/// thousandth of the region's ball (a cap across a bifurcation's crotch).
+pub fn discount_cap_outside(
+    k: usize,
+    region: &mut RegionReport,
+    outside: f64,
+    output_volume: f64,
+) -> Option<String> {
+    if !(outside > 0.0 && outside.is_finite()) {
+        return None;
+    }
+    region.input_volume_in_region -= outside;
+    region.inpainted_volume += outside;
+    if output_volume > 0.0 {
+        region.inpainted_fraction = region.inpainted_volume / output_volume;
+    }
+    let ball = 4.0 / 3.0 * std::f64::consts::PI * region.radius.powi(3);
+    if outside <= 1e-3 * ball {
+        return None;
+    }
+    let [x, y, z] = region.center.map(short_number);
+    Some(format!(
+        "region {k} ({x}, {y}, {z}): the hole's cap crossed space outside the vessel (a crotch \
+         between branches): {} (the mesh's units³) of the capped input there was not kept, and \
+         the input's volume in the region is counted without it",
+        short_number(outside)
     ))
 }
 
