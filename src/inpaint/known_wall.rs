@@ -372,7 +372,7 @@ mod tests {
         // origin, daughters of radius 2.4 at ±20°, joined by a fillet; a hole chopped around its
         // carina. The cap across the hole spans the crotch, outside the vessel.
         let capsule = |p: &Point3<f64>, b: Vector3<f64>, r: f64| {
-            let t = p.coords.dot(&b).clamp(0.0, 1.0 * b.norm_squared()) / b.norm_squared();
+            let t = (p.coords.dot(&b) / b.norm_squared()).clamp(0.0, 1.0);
             (p.coords - b * t).norm() - r
         };
         let a = 20f64.to_radians();
