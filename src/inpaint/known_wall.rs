@@ -286,6 +286,23 @@ mod tests {
     use crate::mesh::cap::{cap_holes, CapOptions};
     use crate::mesh::primitives::open_tube;
 
+    /// `mesh` without its triangles that have a corner in `chop`, its holes capped: the capped
+    /// mesh and its cap triangles.
+    fn chopped_and_capped(mesh: &TriMesh, chop: &Ball) -> (TriMesh, Range<usize>) {
+        let faces = mesh
+            .faces
+            .iter()
+            .filter(|f| !f.iter().any(|&v| chop.contains(&mesh.vertices[v as usize])))
+            .copied()
+            .collect();
+        let (closed, report) = cap_holes(
+            &TriMesh::new(mesh.vertices.clone(), faces),
+            &CapOptions::default(),
+        )
+        .unwrap();
+        (closed, report.cap_faces)
+    }
+
     #[test]
     fn the_fill_is_kept_over_the_hole_and_dropped_over_the_intact_wall() {
         // A tube of radius 5 along z with a hole chopped in its wall at x = 5, capped; D a ball
@@ -295,17 +312,7 @@ mod tests {
             center: Point3::new(5.0, 0.0, 20.0),
             radius: 3.0,
         };
-        let faces = tube
-            .faces
-            .iter()
-            .filter(|f| !f.iter().any(|&v| chop.contains(&tube.vertices[v as usize])))
-            .copied()
-            .collect();
-        let (closed, report) = cap_holes(
-            &TriMesh::new(tube.vertices.clone(), faces),
-            &CapOptions::default(),
-        )
-        .unwrap();
+        let (closed, cap_faces) = chopped_and_capped(&tube, &chop);
         let d = [Ball {
             center: chop.center,
             radius: 8.0,
@@ -316,16 +323,7 @@ mod tests {
         let mut psi = phi0.clone();
         psi.data_mut().iter_mut().for_each(|v| *v -= 2.0);
         let mut w = vec![1.0f32; phi0.data().len()];
-        let lowered = keep_known_wall(
-            &closed,
-            report.cap_faces.clone(),
-            &d,
-            &[],
-            &phi0,
-            &psi,
-            &mut w,
-            h,
-        );
+        let lowered = keep_known_wall(&closed, cap_faces.clone(), &d, &[], &phi0, &psi, &mut w, h);
         assert!(lowered > 0);
         let at = |x: f64, y: f64, z: f64| {
             let i = ((x + 3.0) / h).round() as usize;
@@ -351,7 +349,7 @@ mod tests {
         assert_eq!(
             keep_known_wall(
                 &closed,
-                report.cap_faces.clone(),
+                cap_faces.clone(),
                 &d,
                 &[true],
                 &phi0,
@@ -405,20 +403,7 @@ mod tests {
             center: Point3::new(0.0, 0.0, z),
             radius: 3.5,
         };
-        let faces = vessel
-            .faces
-            .iter()
-            .filter(|f| {
-                !f.iter()
-                    .any(|&v| chop.contains(&vessel.vertices[v as usize]))
-            })
-            .copied()
-            .collect();
-        let (closed, report) = cap_holes(
-            &TriMesh::new(vessel.vertices.clone(), faces),
-            &CapOptions::default(),
-        )
-        .unwrap();
+        let (closed, cap_faces) = chopped_and_capped(&vessel, &chop);
         let d = [Ball {
             center: chop.center,
             radius: 5.0,
@@ -434,8 +419,7 @@ mod tests {
         // A fill that leaves everything out.
         let mut psi = phi0.clone();
         psi.data_mut().iter_mut().for_each(|v| *v = 1.0);
-        let (mask, volumes) =
-            cap_only_nodes(&closed, report.cap_faces.clone(), &d, &[], &phi0, &psi);
+        let (mask, volumes) = cap_only_nodes(&closed, cap_faces.clone(), &d, &[], &phi0, &psi);
         let node = |i: usize| {
             let [a, b, c] = phi0.coords(i);
             phi0.world(a, b, c)
@@ -460,7 +444,7 @@ mod tests {
         // No cap in D, or a narrowed lumen's region: nothing.
         let (none, v0) = cap_only_nodes(&closed, 0..0, &d, &[], &phi0, &psi);
         assert!(none.iter().all(|&m| !m) && v0 == vec![0.0]);
-        let (none, _) = cap_only_nodes(&closed, report.cap_faces, &d, &[true], &phi0, &psi);
+        let (none, _) = cap_only_nodes(&closed, cap_faces, &d, &[true], &phi0, &psi);
         assert!(none.iter().all(|&m| !m));
     }
 }
