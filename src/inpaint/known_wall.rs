@@ -58,8 +58,7 @@ pub fn keep_known_wall(
         return 0;
     }
     let hole_ball = hole_balls(&rim, balls, intact);
-    let wall = own_wall(closed, cap_faces);
-    let wall_bvh = MeshBvh::new(&wall);
+    let wall = OwnWall::new(closed, cap_faces);
     let reach = RIM_REACH_VOXELS * h;
     let [nx, ny, _] = phi0.dims();
     let t = *phi0.transform();
@@ -83,21 +82,16 @@ pub fn keep_known_wall(
                 if hole_ball_of(balls, &hole_ball, &p).is_none() {
                     continue;
                 }
-                // Bounded by the distance to the previous node's nearest triangle (the same
-                // answer, found opening far fewer boxes: neighbouring nodes share their walls).
-                let bound = hint.map(|f| bound_by_triangle(&p, &wall.triangle(f as usize)));
-                let q = wall_bvh.closest_point_bounded(&p, bound);
-                if !q.is_found() {
+                let Some((q, outer)) = wall.nearest(&p, &mut hint) else {
                     continue;
-                }
-                hint = Some(q.face);
+                };
                 // Behind the wall (in the lumen): the fill adds nothing the input has wrong.
-                if (p - q.point).dot(&wall.face_normal_raw(q.face as usize)) <= 0.0 {
+                if !outer {
                     continue;
                 }
                 let r = rim
                     .iter()
-                    .map(|(a, b)| distance_to_segment(&q.point, a, b))
+                    .map(|(a, b)| distance_to_segment(&q, a, b))
                     .fold(f64::INFINITY, f64::min);
                 let s = (1.0 - r / reach).clamp(0.0, 1.0) as f32;
                 let keep = s * s * (3.0 - 2.0 * s);
@@ -135,8 +129,7 @@ pub fn cap_only_nodes(
         return (mask, volumes);
     }
     let hole_ball = hole_balls(&rim, balls, intact);
-    let wall = own_wall(closed, cap_faces);
-    let wall_bvh = MeshBvh::new(&wall);
+    let wall = OwnWall::new(closed, cap_faces);
     let voxel = phi0.voxel();
     let band = voxel as f32;
     let [nx, ny, _] = phi0.dims();
@@ -157,13 +150,7 @@ pub fn cap_only_nodes(
                 let Some(ball) = hole_ball_of(balls, &hole_ball, &p) else {
                     continue;
                 };
-                let bound = hint.map(|f| bound_by_triangle(&p, &wall.triangle(f as usize)));
-                let q = wall_bvh.closest_point_bounded(&p, bound);
-                if !q.is_found() {
-                    continue;
-                }
-                hint = Some(q.face);
-                if (p - q.point).dot(&wall.face_normal_raw(q.face as usize)) > 0.0 {
+                if let Some((_, true)) = wall.nearest(&p, &mut hint) {
                     *m = true;
                     if fill[i] > 0.0 {
                         outside.push((ball, voxel.powi(3)));
@@ -179,16 +166,40 @@ pub fn cap_only_nodes(
     (mask, volumes)
 }
 
-/// The input's own triangles: `closed` without its cap triangles `cap_faces`.
-fn own_wall(closed: &TriMesh, cap_faces: Range<usize>) -> TriMesh {
-    let wall: Vec<[u32; 3]> = closed
-        .faces
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| !cap_faces.contains(i))
-        .map(|(_, f)| *f)
-        .collect();
-    TriMesh::new(closed.vertices.clone(), wall)
+/// The input's own triangles (the capped input without its cap triangles) and their hierarchy.
+struct OwnWall {
+    mesh: TriMesh,
+    bvh: MeshBvh,
+}
+
+impl OwnWall {
+    fn new(closed: &TriMesh, cap_faces: Range<usize>) -> Self {
+        let faces: Vec<[u32; 3]> = closed
+            .faces
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !cap_faces.contains(i))
+            .map(|(_, f)| *f)
+            .collect();
+        let mesh = TriMesh::new(closed.vertices.clone(), faces);
+        let bvh = MeshBvh::new(&mesh);
+        OwnWall { mesh, bvh }
+    }
+
+    /// The wall's nearest point to `p` and whether `p` lies on the wall's outer side there. The
+    /// query is bounded by the distance to `hint`'s triangle, the previous node's nearest (the
+    /// same answer, found opening far fewer boxes: neighbouring nodes share their walls), and
+    /// `hint` becomes this one's.
+    fn nearest(&self, p: &Point3<f64>, hint: &mut Option<u32>) -> Option<(Point3<f64>, bool)> {
+        let bound = hint.map(|f| bound_by_triangle(p, &self.mesh.triangle(f as usize)));
+        let q = self.bvh.closest_point_bounded(p, bound);
+        if !q.is_found() {
+            return None;
+        }
+        *hint = Some(q.face);
+        let outer = (p - q.point).dot(&self.mesh.face_normal_raw(q.face as usize)) > 0.0;
+        Some((q.point, outer))
+    }
 }
 
 /// The first of the hole balls (`hole_ball[k]`) that holds `p`; None when none does or when a
