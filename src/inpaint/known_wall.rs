@@ -38,27 +38,56 @@ use std::ops::Range;
 /// Distance from the rim over which the fill's weight falls to 0 on the intact wall, voxels.
 pub const RIM_REACH_VOXELS: f64 = 3.0;
 
+/// The holes of D and the input's own wall around them, which [`keep_known_wall`] and
+/// [`cap_only_nodes`] read: the holes' rims in D, which balls hold one, and the input's own
+/// triangles (the capped input without its caps) with their hierarchy.
+pub struct HoleWall {
+    rim: Vec<(Point3<f64>, Point3<f64>)>,
+    hole_ball: Vec<bool>,
+    wall: OwnWall,
+}
+
+impl HoleWall {
+    /// The holes of `closed` (the capped input, `cap_faces` its cap triangles) in `balls`;
+    /// `intact` says per ball whether its lumen is intact, only narrowed (missing entries: no),
+    /// which makes it no hole's. None when no hole's rim lies in D (a narrowing, an occlusion
+    /// given as a region of a closed mesh): the wall in D is then the damage.
+    pub fn new(
+        closed: &TriMesh,
+        cap_faces: Range<usize>,
+        balls: &[Ball],
+        intact: &[bool],
+    ) -> Option<HoleWall> {
+        let rim = hole_rims(closed, cap_faces.clone(), balls);
+        if rim.is_empty() {
+            return None;
+        }
+        let hole_ball = hole_balls(&rim, balls, intact);
+        Some(HoleWall {
+            rim,
+            hole_ball,
+            wall: OwnWall::new(closed, cap_faces),
+        })
+    }
+}
+
 /// Lowers `weights` (the fill's blend weight per node of `phi0`'s grid) over the intact wall of
-/// D's hole balls (see the module docs), at the nodes where the fill `psi` lies below the input
-/// `phi0`. `closed` is the capped input and `cap_faces` its cap triangles; `intact` says per
-/// ball whether its lumen is intact, only narrowed (missing entries: no); `h` the voxel (world
-/// units). Returns the number of nodes whose weight was lowered.
+/// D's hole balls (`holes`; see the module docs), at the nodes where the fill `psi` lies below
+/// the input `phi0`; `h` is the voxel (world units). Returns the number of nodes whose weight was
+/// lowered.
 pub fn keep_known_wall(
-    closed: &TriMesh,
-    cap_faces: Range<usize>,
+    holes: &HoleWall,
     balls: &[Ball],
-    intact: &[bool],
     phi0: &Grid3,
     psi: &Grid3,
     weights: &mut [f32],
     h: f64,
 ) -> usize {
-    let rim = hole_rims(closed, cap_faces.clone(), balls);
-    if rim.is_empty() {
-        return 0;
-    }
-    let hole_ball = hole_balls(&rim, balls, intact);
-    let wall = OwnWall::new(closed, cap_faces);
+    let HoleWall {
+        rim,
+        hole_ball,
+        wall,
+    } = holes;
     let reach = RIM_REACH_VOXELS * h;
     let [nx, ny, _] = phi0.dims();
     let t = *phi0.transform();
@@ -79,7 +108,7 @@ pub fn keep_known_wall(
                 }
                 let p = t.index_to_world(Vector3::new((i % nx) as f64, (i / nx) as f64, k as f64));
                 // Only in hole balls: a node also in a ball without a cap keeps its weight.
-                if hole_ball_of(balls, &hole_ball, &p).is_none() {
+                if hole_ball_of(balls, hole_ball, &p).is_none() {
                     continue;
                 }
                 let Some((q, outer)) = wall.nearest(&p, &mut hint) else {
@@ -105,31 +134,22 @@ pub fn keep_known_wall(
         .sum()
 }
 
-/// The nodes of `phi0`'s grid (the capped input's signed distance) in D's hole balls that the
-/// input holds only by its holes' caps (see the module docs): inside `phi0`, outside or within
-/// one of the grid's voxels of the fill `psi`'s surface and shallower in it than in `phi0` (deeper
-/// fill nodes do not move the surface whatever the union gives them), and on the outer side of
-/// the input's own wall at its nearest point. `closed` is the capped input, `cap_faces` its cap
-/// triangles, `intact` as for [`keep_known_wall`]. Returns the mask (all false when D holds no
-/// hole) and, per ball, the volume of the cells of these nodes where the fill is outside: what
-/// the capped input holds in the ball that the union no longer keeps (world units³; a node
-/// counts in the first hole ball holding it).
+/// The nodes of `phi0`'s grid (the capped input's signed distance) in D's hole balls (`holes`)
+/// that the input holds only by its holes' caps (see the module docs): inside `phi0`, outside or
+/// within one of the grid's voxels of the fill `psi`'s surface and shallower in it than in
+/// `phi0` (deeper fill nodes do not move the surface whatever the union gives them), and on the
+/// outer side of the input's own wall at its nearest point. Returns the mask and, per ball, the
+/// volume of the cells of these nodes where the fill is outside: what the capped input holds in
+/// the ball that the union no longer keeps (world units³; a node counts in the first hole ball
+/// holding it).
 pub fn cap_only_nodes(
-    closed: &TriMesh,
-    cap_faces: Range<usize>,
+    holes: &HoleWall,
     balls: &[Ball],
-    intact: &[bool],
     phi0: &Grid3,
     psi: &Grid3,
 ) -> (Vec<bool>, Vec<f64>) {
     let mut mask = vec![false; phi0.data().len()];
     let mut volumes = vec![0.0; balls.len()];
-    let rim = hole_rims(closed, cap_faces.clone(), balls);
-    if rim.is_empty() {
-        return (mask, volumes);
-    }
-    let hole_ball = hole_balls(&rim, balls, intact);
-    let wall = OwnWall::new(closed, cap_faces);
     let voxel = phi0.voxel();
     let band = voxel as f32;
     let [nx, ny, _] = phi0.dims();
@@ -147,10 +167,10 @@ pub fn cap_only_nodes(
                     continue;
                 }
                 let p = t.index_to_world(Vector3::new((i % nx) as f64, (i / nx) as f64, k as f64));
-                let Some(ball) = hole_ball_of(balls, &hole_ball, &p) else {
+                let Some(ball) = hole_ball_of(balls, &holes.hole_ball, &p) else {
                     continue;
                 };
-                if let Some((_, true)) = wall.nearest(&p, &mut hint) {
+                if let Some((_, true)) = holes.wall.nearest(&p, &mut hint) {
                     *m = true;
                     if fill[i] > 0.0 {
                         outside.push((ball, voxel.powi(3)));
@@ -334,7 +354,8 @@ mod tests {
         let mut psi = phi0.clone();
         psi.data_mut().iter_mut().for_each(|v| *v -= 2.0);
         let mut w = vec![1.0f32; phi0.data().len()];
-        let lowered = keep_known_wall(&closed, cap_faces.clone(), &d, &[], &phi0, &psi, &mut w, h);
+        let holes = HoleWall::new(&closed, cap_faces.clone(), &d, &[]).unwrap();
+        let lowered = keep_known_wall(&holes, &d, &phi0, &psi, &mut w, h);
         assert!(lowered > 0);
         let at = |x: f64, y: f64, z: f64| {
             let i = ((x + 3.0) / h).round() as usize;
@@ -349,27 +370,12 @@ mod tests {
         assert_eq!(at(5.5, 0.0, 26.0), 0.0);
         // In the lumen (behind the wall) nothing is lowered.
         assert_eq!(at(0.0, 3.0, 20.0), 1.0);
-        // Without a cap in D (a narrowing of a closed mesh) nothing changes.
-        let mut w2 = vec![1.0f32; phi0.data().len()];
-        assert_eq!(
-            keep_known_wall(&closed, 0..0, &d, &[], &phi0, &psi, &mut w2, h),
-            0
-        );
-        assert!(w2.iter().all(|&v| v == 1.0));
+        // Without a cap in D (a narrowing of a closed mesh) there is no hole to keep a wall of.
+        assert!(HoleWall::new(&closed, 0..0, &d, &[]).is_none());
         // Nor where the ball's lumen is intact, only narrowed, whatever caps it holds.
-        assert_eq!(
-            keep_known_wall(
-                &closed,
-                cap_faces.clone(),
-                &d,
-                &[true],
-                &phi0,
-                &psi,
-                &mut w2,
-                h
-            ),
-            0
-        );
+        let narrowed = HoleWall::new(&closed, cap_faces.clone(), &d, &[true]).unwrap();
+        let mut w2 = vec![1.0f32; phi0.data().len()];
+        assert_eq!(keep_known_wall(&narrowed, &d, &phi0, &psi, &mut w2, h), 0);
         assert!(w2.iter().all(|&v| v == 1.0));
     }
 
@@ -430,7 +436,8 @@ mod tests {
         // A fill that leaves everything out.
         let mut psi = phi0.clone();
         psi.data_mut().iter_mut().for_each(|v| *v = 1.0);
-        let (mask, volumes) = cap_only_nodes(&closed, cap_faces.clone(), &d, &[], &phi0, &psi);
+        let holes = HoleWall::new(&closed, cap_faces.clone(), &d, &[]).unwrap();
+        let (mask, volumes) = cap_only_nodes(&holes, &d, &phi0, &psi);
         let node = |i: usize| {
             let [a, b, c] = phi0.coords(i);
             phi0.world(a, b, c)
@@ -453,9 +460,9 @@ mod tests {
         // The cells of the marked nodes, in the one ball.
         assert!((volumes[0] - marked.len() as f64 * h.powi(3)).abs() < 1e-9);
         // No cap in D, or a narrowed lumen's region: nothing.
-        let (none, v0) = cap_only_nodes(&closed, 0..0, &d, &[], &phi0, &psi);
+        assert!(HoleWall::new(&closed, 0..0, &d, &[]).is_none());
+        let narrowed = HoleWall::new(&closed, cap_faces, &d, &[true]).unwrap();
+        let (none, v0) = cap_only_nodes(&narrowed, &d, &phi0, &psi);
         assert!(none.iter().all(|&m| !m) && v0 == vec![0.0]);
-        let (none, _) = cap_only_nodes(&closed, cap_faces, &d, &[true], &phi0, &psi);
-        assert!(none.iter().all(|&m| !m));
     }
 }

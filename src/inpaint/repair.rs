@@ -30,7 +30,9 @@ use super::axis::{branch_crossings, estimate_axis, fit_cylinder};
 use super::checks::RepairChecks;
 use super::guided::{fill_guided, plan_guides, GuideKind, GuideOptions, HoleCaps, JUNCTION_FILL};
 use super::junction::{fill_junction, Branch};
-use super::known_wall::{cap_only_nodes, hole_balls, hole_rims, keep_known_wall, rim_points};
+use super::known_wall::{
+    cap_only_nodes, hole_balls, hole_rims, keep_known_wall, rim_points, HoleWall,
+};
 use super::mask::{blend_known, blend_weights, region_depth, region_mask};
 use super::msr_fill::{fill_msr, MsrFillOptions};
 use super::paper::{fill_paper, PaperOptions, DT_VOXELS2};
@@ -899,18 +901,14 @@ fn finish_fill(
     unknown: &[bool],
     h: f64,
 ) -> Vec<f64> {
-    keep_known_wall(
-        closed_input,
-        cap_faces.clone(),
-        balls,
-        intact_lumen,
-        phi0,
-        psi,
-        weights,
-        h,
-    );
-    let (cap_only, cap_outside) =
-        cap_only_nodes(closed_input, cap_faces, balls, intact_lumen, phi0, psi);
+    let (cap_only, cap_outside) = match HoleWall::new(closed_input, cap_faces, balls, intact_lumen)
+    {
+        Some(holes) => {
+            keep_known_wall(&holes, balls, phi0, psi, weights, h);
+            cap_only_nodes(&holes, balls, phi0, psi)
+        }
+        None => (vec![false; psi.data().len()], vec![0.0; balls.len()]),
+    };
     psi.data_mut()
         .par_iter_mut()
         .zip(phi0.data().par_iter())
