@@ -237,8 +237,9 @@
 //! Re-measured 2026-12-06, evening (load 0.2–1.6), after a hole's cap that spans space outside
 //! the vessel was no longer kept as the input's lumen (`known_wall::cap_only_nodes`: across a
 //! hole over a crotch the cap closed the space between the iliacs): of the 100 cases of seeds
-//! 21–27 and the 33 end bites, one moved, the capped aorta's carina chop of seed 27, 12.32h /
-//! +15.2% → 9.63h / +10.2% (MeshLib 11.60h: now beaten on 93 of the 100); every other figure
+//! 21–27 and the 33 end bites, two moved, the capped aorta's carina chop of seed 27, 12.32h /
+//! +15.1% → 9.63h / +10.2% (MeshLib 11.60h: now beaten on 93 of the 100), and the open aorta's
+//! junction chop of seed 26 in volume only (+3.1% → +2.6%, 3.55h); every other figure
 //! as above (seeds 21–23 1.05h / 1.2%, 44 and 66 of 75; seeds 24–27 0.97, 1.21, 1.44, 1.50h, 50
 //! and 85 of 100; end bites 2.59h / 1.6%, 17 of 33). Our whole command on a chop: median 0.48 s
 //! (0.34–0.77 s) over the 45 of seeds 21–23 (0.43 s, 0.32–0.71 s, in a run of the commit before

@@ -256,7 +256,7 @@ fn a_junction_hole_of_the_capped_aorta_is_stitched() {
 /// The benchmark's chop#1 of the capped aorta in the draw of seed 27: a hole over the carina,
 /// between the iliacs. The hole's cap spans the crotch, outside the vessel, and the union of the
 /// fill with the capped input kept that web: the crotch closed 6.6 mm below the truth's carina
-/// (12.32h, +15.2% in D). What only the cap holds outside the input's own wall is now left to the
+/// (12.32h, +15.1% in D). What only the cap holds outside the input's own wall is now left to the
 /// fill (`known_wall::cap_only_nodes`), and the report says so and counts the input's volume in
 /// D without it.
 #[test]

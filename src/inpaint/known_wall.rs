@@ -22,7 +22,7 @@
 //! signed distance. Across a hole at a bifurcation's crotch the cap spans the space between the
 //! branches, outside the vessel, and the union of the fill with the capped input kept that web
 //! (the capped aorta's chop over the carina in seed 27 of `benches/repair_real`: the crotch
-//! closed 6.6 mm below the truth's carina, 12.3h / +15% in D). So [`cap_only_nodes`] finds the
+//! closed 6.6 mm below the truth's carina, 12.3h / +15% in D; now 9.6h / +10%). So [`cap_only_nodes`] finds the
 //! nodes of a hole's ball that the capped input holds only by its cap: inside φ_0, but on the
 //! outer side of the input's own wall at its nearest point; the fill alone decides there.
 
