@@ -195,9 +195,10 @@ const SHORTEST_STRIP_CELLS: usize = 1 << 24;
 /// Of the strips, the one with the fewest *folded* triangles is taken first, and the shortest
 /// among those: a triangle is folded when it faces against the surfaces its vertices lie on
 /// (`normals`, per vertex of `verts`: their sum). The patch loop, cut near ∂D, runs unevenly
-/// beside the rim, and the shortest strip turned slivers over there (1 to 9 per output on the
-/// real vessels of `benches/repair_real`, on all but 2 of its 105 chops: a fold, two triangles
-/// lying on each other). Returns the strip and its folded triangles.
+/// beside the rim, and the shortest strip turned slivers over there (a fold: two triangles lying
+/// on each other; 148 in 82 of the 140 outputs of `benches/repair_real`'s seeds 21–27 on its four
+/// vessels other than the ICA, whose input has folds of its own; 1 now). Returns the strip and
+/// its folded triangles.
 fn zipper(
     verts: &[Point3<f64>],
     normals: &[Vector3<f64>],
