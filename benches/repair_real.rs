@@ -50,7 +50,11 @@
 //! samples, BVH closest point; benches/common/surface.rs) in units of h, h = the voxel our
 //! default repair of that case used (its report; the project's default-voxel rule on the damaged
 //! mesh when ours failed); the volume error in D against the truth, %; watertight (closed,
-//! manifold, consistently wound: `mesh_info`); components; seconds. A failed output counts as
+//! manifold, consistently wound: `mesh_info`); components; the faces within 2 radii of D's
+//! centre that do not face out (winding number probed in front of and behind each:
+//! `inpaint::checks::faces_not_facing_out`; a slit, or a triangle folded over, as the stitch's
+//! shortest seam left 1–4 per output before; also a crease or sliver thinner than the probe's
+//! offset, and an input's own folds that an output keeps); seconds. A failed output counts as
 //! an infinite Hausdorff distance. For the stenosis, the NASCET and diameter stenosis our report
 //! gives for the damaged input. Then per tool: the medians, the cases within 1.5h and 5% and
 //! within 3h, and on how many cases ours beats each peer (smaller Hausdorff in D, as printed to
@@ -353,9 +357,10 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use vesselmsr::bvh::MeshBvh;
+use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
 use vesselmsr::centerline::{compute_centerline, Branch, Centerline, CenterlineOptions};
 use vesselmsr::grid::spec::default_voxel;
+use vesselmsr::inpaint::checks::faces_not_facing_out;
 use vesselmsr::inpaint::phantom::SplitMix;
 use vesselmsr::inpaint::region::{local_vessel_radius, write_regions, Ball};
 use vesselmsr::io::{read_mesh, write_mesh};
@@ -469,6 +474,10 @@ struct Outcome {
     volume_pct: f64,
     watertight: bool,
     components: usize,
+    /// Faces within 2 radii of D's centre that do not face out (a slit, fin or pocket, a
+    /// triangle folded over, or a feature thinner than the probe's offset:
+    /// `faces_not_facing_out`); None for a surface that is not closed.
+    facing_in: Option<usize>,
     seconds: f64,
     /// Why there is no output.
     error: Option<String>,
@@ -481,6 +490,7 @@ impl Outcome {
             volume_pct: f64::NAN,
             watertight: false,
             components: 0,
+            facing_in: None,
             seconds,
             error: Some(why),
         }
@@ -1083,9 +1093,36 @@ fn judge(output: &TriMesh, truth: &TriMesh, region: &Ball, h: f64, seconds: f64)
         volume_pct: 100.0 * (volume_in(output, &balls) - v_truth) / v_truth,
         watertight: info.watertight,
         components: info.components,
+        facing_in: info
+            .watertight
+            .then(|| facing_in_near(output, region, info.signed_volume < 0.0, h)),
         seconds,
         error: None,
     }
+}
+
+/// The faces of the closed `output` with a corner within 2 radii of `region`'s centre that do
+/// not face out (`faces_not_facing_out`, probed 0.1 of the smaller of the mean edge and `h` off
+/// their centroids; an `inward` surface is judged turned outward).
+fn facing_in_near(output: &TriMesh, region: &Ball, inward: bool, h: f64) -> usize {
+    let mut mesh = output.clone();
+    if inward {
+        mesh.faces.iter_mut().for_each(|f| f.swap(1, 2));
+    }
+    let near = Ball {
+        center: region.center,
+        radius: 2.0 * region.radius,
+    };
+    let faces: Vec<usize> = (0..mesh.faces.len())
+        .filter(|&f| {
+            mesh.faces[f]
+                .iter()
+                .any(|&v| near.contains(&mesh.vertices[v as usize]))
+        })
+        .collect();
+    let winding = WindingNumber::new(&mesh, WindingOptions::SIDES);
+    let eps = 0.1 * mean_edge_length(&mesh).min(h);
+    faces_not_facing_out(&mesh, &winding, &faces, eps)
 }
 
 /// How the user tells ours where D is on the case in `dir`: `--holes` (chop), the point picked
@@ -1413,7 +1450,7 @@ fn fmt_s(x: f64) -> String {
 
 fn print_row(case: &str, tool: &str, o: &Outcome) {
     println!(
-        "  {case:<22} {tool:<11} {:>8} {:>9} {:>10} {:>5} {:>8}{}",
+        "  {case:<22} {tool:<11} {:>8} {:>9} {:>10} {:>5} {:>9} {:>8}{}",
         fmt_h(o.hausdorff_h),
         fmt_pct(o.volume_pct),
         if o.error.is_some() {
@@ -1428,6 +1465,7 @@ fn print_row(case: &str, tool: &str, o: &Outcome) {
         } else {
             o.components.to_string()
         },
+        o.facing_in.map_or("-".to_string(), |n| n.to_string()),
         fmt_s(o.seconds),
         o.error
             .as_ref()
@@ -1437,8 +1475,8 @@ fn print_row(case: &str, tool: &str, o: &Outcome) {
 
 fn print_vessel_table(results: &[CaseResult], tools: &[&str]) {
     println!(
-        "  {:<22} {:<11} {:>8} {:>9} {:>10} {:>5} {:>8}",
-        "case", "tool", "H in D h", "vol in D", "watertight", "comp", "seconds"
+        "  {:<22} {:<11} {:>8} {:>9} {:>10} {:>5} {:>9} {:>8}",
+        "case", "tool", "H in D h", "vol in D", "watertight", "comp", "facing in", "seconds"
     );
     for r in results {
         print_row(&r.label, "(damaged)", &r.input);
@@ -1532,6 +1570,28 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
             per_kind.join(", ")
         );
     }
+    // Faces near D that do not face out, per tool, over its closed outputs (a fold of the seam,
+    // a slit; an input's own folds outside D count for every tool that keeps them).
+    let facing: Vec<String> = tools
+        .iter()
+        .enumerate()
+        .map(|(t, tool)| {
+            let counts: Vec<usize> = results
+                .iter()
+                .filter_map(|r| r.outcomes[t].as_ref().and_then(|o| o.facing_in))
+                .collect();
+            format!(
+                "{tool} {} in {} of {}",
+                counts.iter().sum::<usize>(),
+                counts.iter().filter(|&&n| n > 0).count(),
+                counts.len()
+            )
+        })
+        .collect();
+    println!(
+        "  faces within 2 radii of D that do not face out (closed outputs): {}",
+        facing.join("; ")
+    );
     // Ours by how the regions were filled (the report's `fill`): where the fill is least sure.
     let mut fills: Vec<&str> = results.iter().map(|r| r.our_fill.as_str()).collect();
     fills.sort_unstable();

@@ -158,19 +158,7 @@ impl<'a> RepairChecks<'a> {
         // Evenly strided faces, at most SIDE_SAMPLES: a slit, fin or pocket spans many faces.
         let stride = near_faces.len().div_ceil(SIDE_SAMPLES).max(1);
         let sampled: Vec<usize> = near_faces.iter().step_by(stride).copied().collect();
-        let wrong = sampled
-            .par_iter()
-            .filter(|&&i| {
-                let [a, b, c] = output.faces[i].map(|k| v[k as usize]);
-                let Some(n) = (b - a).cross(&(c - a)).try_normalize(1e-300) else {
-                    return false;
-                };
-                let p = Point3::from((a.coords + b.coords + c.coords) / 3.0);
-                let front = winding.winding_number(&(p + n * eps));
-                let back = winding.winding_number(&(p - n * eps));
-                !(front < 0.5 && back >= 0.5)
-            })
-            .count();
+        let wrong = faces_not_facing_out(output, &winding, &sampled, eps);
         if wrong as f64 > SIDE_TOLERANCE * sampled.len() as f64 {
             return Err(format!(
                 "{wrong} of {} faces sampled near D do not separate inside from outside (a slit, fin or pocket inside the vessel)",
@@ -198,6 +186,33 @@ impl<'a> RepairChecks<'a> {
         }
         Ok(Measured { winding, volumes })
     }
+}
+
+/// How many of `faces` (indices into `mesh`) do not separate inside from outside: the winding
+/// number (`winding`, of `mesh`) `eps` in front of the face's centroid, along its normal, is not
+/// below ½, or `eps` behind it is not at least ½. A slit, fin or pocket inside the solid has
+/// inside on both sides; a triangle folded over (facing in) has inside in front. Degenerate
+/// faces are not counted.
+pub fn faces_not_facing_out(
+    mesh: &TriMesh,
+    winding: &WindingNumber,
+    faces: &[usize],
+    eps: f64,
+) -> usize {
+    let v = &mesh.vertices;
+    faces
+        .par_iter()
+        .filter(|&&i| {
+            let [a, b, c] = mesh.faces[i].map(|k| v[k as usize]);
+            let Some(n) = (b - a).cross(&(c - a)).try_normalize(1e-300) else {
+                return false;
+            };
+            let p = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+            let front = winding.winding_number(&(p + n * eps));
+            let back = winding.winding_number(&(p - n * eps));
+            !(front < 0.5 && back >= 0.5)
+        })
+        .count()
 }
 
 /// Checks `output` (the repaired, closed surface) against `input` (the closed input) around the

@@ -2,6 +2,7 @@
 
 use nalgebra::Point3;
 use vesselmsr::bvh::{MeshBvh, WindingNumber, WindingOptions};
+use vesselmsr::inpaint::checks::faces_not_facing_out;
 use vesselmsr::inpaint::region::Ball;
 use vesselmsr::mesh::distance::sample_surface;
 use vesselmsr::report::stenosis::volume_in_ball;
@@ -53,22 +54,12 @@ pub fn one_sided_faces_near(
         .collect();
     let winding = WindingNumber::new(mesh, WindingOptions::default());
     let v = &mesh.vertices;
-    let near: Vec<&[u32; 3]> = mesh
-        .faces
-        .iter()
-        .filter(|f| f.iter().any(|&k| in_regions(&grown, &v[k as usize])))
-        .collect();
-    let wrong = near
-        .iter()
-        .filter(|f| {
-            let [a, b, c] = f.map(|k| v[k as usize]);
-            let Some(n) = (b - a).cross(&(c - a)).try_normalize(1e-300) else {
-                return false;
-            };
-            let p = Point3::from((a.coords + b.coords + c.coords) / 3.0);
-            !(winding.winding_number(&(p + n * eps)) < 0.5
-                && winding.winding_number(&(p - n * eps)) >= 0.5)
+    let near: Vec<usize> = (0..mesh.faces.len())
+        .filter(|&f| {
+            mesh.faces[f]
+                .iter()
+                .any(|&k| in_regions(&grown, &v[k as usize]))
         })
-        .count();
-    (wrong, near.len())
+        .collect();
+    (faces_not_facing_out(mesh, &winding, &near, eps), near.len())
 }
