@@ -3,7 +3,7 @@
 
 mod common;
 use common::*;
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
 use vesselmsr::mesh::cap::{cap_holes, CapMethod, CapOptions, CapReport};
@@ -489,6 +489,53 @@ fn degenerate_rim_edge_is_collapsed_before_capping() {
         "{}",
         rep.max_cap_aspect_ratio
     );
+}
+
+#[test]
+fn a_sliver_ear_on_the_rim_is_cut_off_before_capping() {
+    // A tube whose top rim edge t1 → t0 gets a vertex s at its middle, 1e-7 of an edge outward
+    // in the rim's plane, joined by the triangle (t0, t1, s): the rim runs t1 → s → t0 along two
+    // edges of that sliver, which the cap (in the same plane, through s) would overlap (the
+    // clipped ends of the aneurysm's ICA in benches/repair_real hold 13 such ears: 9 pairs of
+    // triangles colliding once capped). It is cut off: the rim runs t1 → t0 again.
+    let (r, h, n) = (1.0, 3.0, 24);
+    let mut m = tube(r, n, 4, |_| 0.0, |_| h);
+    let (t0, t1) = ((3 * n) as u32, (3 * n + 1) as u32);
+    assert!(m
+        .faces
+        .iter()
+        .any(|t| (0..3).any(|k| t[k] == t1 && t[(k + 1) % 3] == t0)));
+    let (p0, p1) = (m.vertices[t0 as usize], m.vertices[t1 as usize]);
+    let mid = Point3::from((p0.coords + p1.coords) / 2.0);
+    let out_dir = Vector3::new(mid.x, mid.y, 0.0).normalize();
+    let s = m.vertices.len() as u32;
+    m.vertices.push(mid + out_dir * 1e-7 * (p1 - p0).norm());
+    m.faces.push([t0, t1, s]);
+    let ear = m.num_faces() - 1;
+    assert_eq!(boundary_loops(&m).len(), 2);
+
+    let (out, rep) = cap_holes(&m, &CapOptions::default()).unwrap();
+    check_closed_oriented(&out).unwrap();
+    assert_eq!(rep.removed_faces, vec![ear]);
+    assert!(rep.welded_rim_vertices.is_empty());
+    assert!(out.faces.iter().all(|t| !t.contains(&s)), "s left unused");
+    assert!(
+        rep.messages.iter().any(|m| m.contains("cut off 1 sliver")),
+        "{:?}",
+        rep.messages
+    );
+    let exact = polygon_area(r, n) * h;
+    assert!((signed_volume(&out) - exact).abs() < 1e-6 * exact);
+
+    // Without the rim's clean-up the ear stays (and the cap runs through s).
+    let keep = CapOptions {
+        rim_weld_fraction: 0.0,
+        ..Default::default()
+    };
+    let (out, rep) = cap_holes(&m, &keep).unwrap();
+    check_closed_oriented(&out).unwrap();
+    assert!(rep.removed_faces.is_empty());
+    assert!(out.faces.contains(&[t0, t1, s]));
 }
 
 #[test]

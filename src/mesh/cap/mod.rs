@@ -18,6 +18,9 @@
 //!
 //! Rim edges shorter than a tiny fraction of the target edge length (vertices a rounding error
 //! apart) are collapsed first: no cap triangle on such an edge can have a bounded aspect ratio.
+//! Sliver ears of a loop (a triangle with two rim edges whose middle vertex lies within that
+//! fraction of the line through the other two, as a clipped end can leave) are cut off too: the
+//! cap through that vertex would overlap them.
 //! Cap chords never duplicate an existing edge. Cap triangles are wound opposite to the loop
 //! direction, which is how the adjacent mesh triangles traverse the rim, so a consistently
 //! oriented input gives a consistently oriented closed output; the result is finally flipped as a
@@ -61,7 +64,9 @@ pub struct CapOptions {
     pub max_dp_loop_vertices: usize,
     /// Rim edges shorter than this fraction of their loop's target edge length (dimensionless)
     /// are collapsed before capping, merging two rim vertices that are a rounding error apart
-    /// (no cap triangle on such an edge can have a bounded aspect ratio); 0 disables.
+    /// (no cap triangle on such an edge can have a bounded aspect ratio), and triangles with two
+    /// rim edges whose middle vertex lies within this fraction of the line through the other two
+    /// (a sliver ear the cap would overlap) are removed; 0 disables both.
     pub rim_weld_fraction: f64,
     /// Most vertices a single cap may add (a guard against a tiny target edge length), a count.
     pub max_vertices_per_cap: usize,
@@ -137,7 +142,8 @@ pub struct CapReport {
     /// Rim vertices merged into a neighbour before capping, as [kept, removed] vertex indices
     /// (see `CapOptions::rim_weld_fraction`); the removed ones stay in the vertex list unused.
     pub welded_rim_vertices: Vec<[u32; 2]>,
-    /// Indices (in the input) of the sliver triangles dropped by those merges, ascending.
+    /// Indices (in the input) of the sliver triangles dropped by those merges and of the sliver
+    /// ears cut off (their middle vertices stay in the vertex list unused), ascending.
     pub removed_faces: Vec<usize>,
     /// Per simple loop details.
     pub loops: Vec<LoopCap>,
@@ -241,6 +247,15 @@ pub fn cap_holes(mesh: &TriMesh, opts: &CapOptions) -> Result<(TriMesh, CapRepor
             }
             report.welded_rim_vertices.extend(merged);
             report.removed_faces.extend(removed);
+            let n1 = lp.len();
+            let ears = weld::cut_sliver_ears(&mesh.vertices, &mut work, lp, min_len, &on_loops);
+            if !ears.is_empty() {
+                report.messages.push(format!(
+                    "loop {li} ({n1} vertices): cut off {} sliver triangle(s) with two rim edges whose middle vertex lies within {min_len:.3e} of the line through its neighbours",
+                    ears.len()
+                ));
+            }
+            report.removed_faces.extend(ears);
         }
         report.removed_faces.sort_unstable();
     }
