@@ -477,18 +477,24 @@ fn degenerate_rim_edge_is_collapsed_before_capping() {
 
     // Without the collapse the mesh still closes, but the cap cannot grade well enough around
     // the tiny edge.
-    let keep = CapOptions {
-        rim_weld_fraction: 0.0,
-        ..Default::default()
-    };
-    let (out, rep) = cap_holes(&m, &keep).unwrap();
-    check_closed_oriented(&out).unwrap();
+    let (_, rep) = capped_without_rim_cleanup(&m);
     assert!(rep.welded_rim_vertices.is_empty() && rep.removed_faces.is_empty());
     assert!(
         rep.max_cap_aspect_ratio > 10.0,
         "{}",
         rep.max_cap_aspect_ratio
     );
+}
+
+/// `m` capped with the rim's clean-up off (`rim_weld_fraction` 0), checked closed and oriented.
+fn capped_without_rim_cleanup(m: &TriMesh) -> (TriMesh, CapReport) {
+    let keep = CapOptions {
+        rim_weld_fraction: 0.0,
+        ..Default::default()
+    };
+    let (out, rep) = cap_holes(m, &keep).unwrap();
+    check_closed_oriented(&out).unwrap();
+    (out, rep)
 }
 
 #[test]
@@ -528,12 +534,7 @@ fn a_sliver_ear_on_the_rim_is_cut_off_before_capping() {
     assert!((signed_volume(&out) - exact).abs() < 1e-6 * exact);
 
     // Without the rim's clean-up the ear stays (and the cap runs through s).
-    let keep = CapOptions {
-        rim_weld_fraction: 0.0,
-        ..Default::default()
-    };
-    let (out, rep) = cap_holes(&m, &keep).unwrap();
-    check_closed_oriented(&out).unwrap();
+    let (out, rep) = capped_without_rim_cleanup(&m);
     assert!(rep.removed_faces.is_empty());
     assert!(out.faces.contains(&[t0, t1, s]));
 }

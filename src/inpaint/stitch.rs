@@ -439,6 +439,27 @@ mod tests {
         (mesh, ball)
     }
 
+    /// Every edge of the loops `a` (vertices 0..a.len()) and `b` (the rest) is used by `faces`
+    /// once, against its loop's direction, and no other edge joins two vertices of one loop.
+    fn assert_each_loop_edge_once_reversed(faces: &[[u32; 3]], a: &[u32], b: &[u32]) {
+        let na = a.len() as u32;
+        let mut directed: Vec<(u32, u32)> = faces
+            .iter()
+            .flat_map(|f| (0..3).map(move |e| (f[e], f[(e + 1) % 3])))
+            .filter(|&(p, q)| (p < na) == (q < na))
+            .collect();
+        directed.sort_unstable();
+        let loop_edges = |l: &[u32]| {
+            (0..l.len())
+                .map(|j| (l[(j + 1) % l.len()], l[j]))
+                .collect::<Vec<_>>()
+        };
+        let mut expected = loop_edges(a);
+        expected.extend(loop_edges(b));
+        expected.sort_unstable();
+        assert_eq!(directed, expected);
+    }
+
     /// Loops of unlike spacing on an elongated saddle (a hole's rim across a junction, and a
     /// patch loop three times as fine and unevenly spaced): every loop edge is used once, against
     /// its loop's direction, and the longest edge across is 0.86 (0.85 apart at the closest;
@@ -459,18 +480,7 @@ mod tests {
         let b: Vec<u32> = (20..80).rev().collect();
         let (faces, _) = zipper(&verts, &vec![Vector3::zeros(); verts.len()], &a, &b);
         assert_eq!(faces.len(), 80);
-        let mut directed: Vec<(u32, u32)> = faces
-            .iter()
-            .flat_map(|f| (0..3).map(move |e| (f[e], f[(e + 1) % 3])))
-            .filter(|&(p, q)| (p < 20) == (q < 20))
-            .collect();
-        directed.sort_unstable();
-        let mut expected: Vec<(u32, u32)> = (0..20)
-            .map(|i| ((i + 1) % 20, i))
-            .chain((0..60).map(|j| (b[(j + 1) % 60], b[j])))
-            .collect();
-        expected.sort_unstable();
-        assert_eq!(directed, expected);
+        assert_each_loop_edge_once_reversed(&faces, &a, &b);
         let longest = faces
             .iter()
             .flat_map(|f| (0..3).map(move |e| (f[e], f[(e + 1) % 3])))
@@ -536,19 +546,7 @@ mod tests {
         assert_eq!(facing_down(&shortest), 2);
         let (faces, folded) = zipper(&verts, &vec![Vector3::z(); 32], &a, &b);
         assert_eq!((folded, facing_down(&faces)), (0, 0));
-        // Every loop edge used once, against its loop's direction.
-        let mut directed: Vec<(u32, u32)> = faces
-            .iter()
-            .flat_map(|f| (0..3).map(move |e| (f[e], f[(e + 1) % 3])))
-            .filter(|&(p, q)| (p < 8) == (q < 8))
-            .collect();
-        directed.sort_unstable();
-        let mut expected: Vec<(u32, u32)> = (0..8)
-            .map(|i| ((i + 1) % 8, i))
-            .chain((0..24).map(|j| (b[(j + 1) % 24], b[j])))
-            .collect();
-        expected.sort_unstable();
-        assert_eq!(directed, expected);
+        assert_each_loop_edge_once_reversed(&faces, &a, &b);
     }
 
     #[test]

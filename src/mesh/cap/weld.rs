@@ -55,6 +55,14 @@ impl Working {
         s
     }
 
+    /// Removes triangle `f` (from its vertices' lists too).
+    fn remove(&mut self, f: u32) {
+        self.alive[f as usize] = false;
+        for v in self.faces[f as usize] {
+            self.inc[v as usize].retain(|&g| g != f);
+        }
+    }
+
     /// Merges vertex `b` into `a` across the rim edge a → b if that is safe; returns the removed
     /// triangle.
     fn collapse(&mut self, vertices: &[Point3<f64>], a: u32, b: u32) -> Option<usize> {
@@ -99,10 +107,7 @@ impl Working {
                 return None;
             }
         }
-        self.alive[f as usize] = false;
-        for &v in &t {
-            self.inc[v as usize].retain(|&g| g != f);
-        }
+        self.remove(f);
         let moved: Vec<u32> = std::mem::take(&mut self.inc[b as usize]);
         for g in moved {
             for v in self.faces[g as usize].iter_mut() {
@@ -194,10 +199,7 @@ pub(super) fn cut_sliver_ears(
         };
         match ear {
             Some(f) if shared.get(&b).is_none_or(|&k| k <= 1) && sliver() => {
-                work.alive[f as usize] = false;
-                for &v in &work.faces[f as usize] {
-                    work.inc[v as usize].retain(|&g| g != f);
-                }
+                work.remove(f);
                 removed.push(f as usize);
                 lp.remove(i);
                 // The new corner at A may be an ear in its turn.
