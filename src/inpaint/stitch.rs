@@ -15,7 +15,7 @@
 //! either side of it into one loop; so the margins tried end with shallow ones, down to ∂D itself.
 
 use super::region::{depth_in, Ball};
-use crate::mesh::measures::component_signed_volumes;
+use crate::mesh::measures::{component_signed_volumes, vertex_normal_sums};
 use crate::mesh::topology::{boundary_loops, connected_components, find, union, EdgeMap};
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
@@ -287,8 +287,7 @@ fn zipper(
         }
     }
     faces.reverse();
-    let nf = faces.iter().map(|&t| folded(t) as usize).sum();
-    (faces, nf)
+    (faces, above[m].0 as usize)
 }
 
 /// The stitched mesh (see the module docs): `cut` (the input with D cut out), `patch` (a closed
@@ -360,7 +359,7 @@ fn stitch_at(
     let offset = kept.vertices.len() as u32;
     let mut out = kept.clone();
     out.append(&part);
-    let normals = vertex_normals(&out);
+    let normals = vertex_normal_sums(&out, out.faces.iter());
     let mut folds = 0;
     let mut free: Vec<bool> = vec![true; rims.len()];
     for hole in holes {
@@ -391,18 +390,6 @@ fn stitch_at(
         )));
     }
     Ok((out, folds))
-}
-
-/// The area-weighted normal of each vertex of `mesh` (the sum of its faces' raw normals).
-fn vertex_normals(mesh: &TriMesh) -> Vec<Vector3<f64>> {
-    let mut n = vec![Vector3::zeros(); mesh.vertices.len()];
-    for (f, face) in mesh.faces.iter().enumerate() {
-        let raw = mesh.face_normal_raw(f);
-        for &v in face {
-            n[v as usize] += raw;
-        }
-    }
-    n
 }
 
 #[cfg(test)]

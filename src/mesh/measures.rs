@@ -158,6 +158,36 @@ pub fn component_nesting_depths(mesh: &TriMesh, n: usize, labels: &[u32]) -> Vec
         .collect()
 }
 
+/// At each vertex of `mesh`, the sum of the raw normals (cross products, twice the area) of
+/// the faces `faces` it is on: the area-weighted vertex normal, not normalised (zero for a
+/// vertex on none of them).
+pub fn vertex_normal_sums<'a>(
+    mesh: &TriMesh,
+    faces: impl Iterator<Item = &'a [u32; 3]>,
+) -> Vec<Vector3<f64>> {
+    let mut normals = vec![Vector3::<f64>::zeros(); mesh.vertices.len()];
+    for f in faces {
+        let [a, b, c] = f.map(|i| mesh.vertices[i as usize]);
+        let nf = (b - a).cross(&(c - a));
+        for &i in f {
+            normals[i as usize] += nf;
+        }
+    }
+    normals
+}
+
+/// [`vertex_normal_sums`] normalised (zero stays zero).
+pub fn vertex_normals<'a>(
+    mesh: &TriMesh,
+    faces: impl Iterator<Item = &'a [u32; 3]>,
+) -> Vec<Vector3<f64>> {
+    let mut normals = vertex_normal_sums(mesh, faces);
+    for v in &mut normals {
+        *v = v.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
+    }
+    normals
+}
+
 /// Axis-aligned bounding box (min, max) of the vertices used by faces (of all vertices when there
 /// are no faces). An empty mesh gives two origins.
 pub fn bounding_box(mesh: &TriMesh) -> (Point3<f64>, Point3<f64>) {

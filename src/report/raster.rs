@@ -4,27 +4,7 @@
 //! with an ambient term and two-sided shading, and a box-filter downsample to the final image.
 
 use super::image::RgbImage;
-use crate::TriMesh;
 use nalgebra::Vector3;
-
-/// Area-weighted vertex normals of the faces `faces` of `mesh` (zero for unused vertices).
-pub(super) fn vertex_normals<'a>(
-    mesh: &TriMesh,
-    faces: impl Iterator<Item = &'a [u32; 3]>,
-) -> Vec<Vector3<f64>> {
-    let mut normals = vec![Vector3::<f64>::zeros(); mesh.vertices.len()];
-    for f in faces {
-        let [a, b, c] = f.map(|i| mesh.vertices[i as usize]);
-        let nf = (b - a).cross(&(c - a));
-        for &i in f {
-            normals[i as usize] += nf;
-        }
-    }
-    for v in &mut normals {
-        *v = v.try_normalize(0.0).unwrap_or_else(Vector3::zeros);
-    }
-    normals
-}
 
 /// The lighting of a scene: view direction (into the screen), light direction, ambient share.
 pub(super) struct Lighting {

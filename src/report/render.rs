@@ -14,8 +14,9 @@
 
 use super::colormap::ColorMap;
 use super::image::RgbImage;
-use super::raster::{vertex_normals, Lighting, ZBuffer};
+use super::raster::{Lighting, ZBuffer};
 use super::text::{draw_text, format_value, text_width, HAlign};
+use crate::mesh::measures::vertex_normals;
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Point3, Vector3};
 

@@ -35,10 +35,11 @@
 //! `unit` (never assumed to be mm).
 
 use super::image::{write_png, RgbImage};
-use super::raster::{vertex_normals, Lighting, ZBuffer};
+use super::raster::{Lighting, ZBuffer};
 use super::text::{draw_text, text_width, HAlign};
 use crate::bvh::MeshBvh;
 use crate::inpaint::region::Ball;
+use crate::mesh::measures::vertex_normals;
 use crate::{Error, Result, TriMesh};
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
