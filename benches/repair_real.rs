@@ -1105,10 +1105,15 @@ fn judge(output: &TriMesh, truth: &TriMesh, region: &Ball, h: f64, seconds: f64)
 /// not face out (`faces_not_facing_out`, probed 0.1 of the smaller of the mean edge and `h` off
 /// their centroids; an `inward` surface is judged turned outward).
 fn facing_in_near(output: &TriMesh, region: &Ball, inward: bool, h: f64) -> usize {
-    let mut mesh = output.clone();
-    if inward {
-        mesh.faces.iter_mut().for_each(|f| f.swap(1, 2));
-    }
+    let flipped;
+    let mesh = if inward {
+        let mut m = output.clone();
+        m.faces.iter_mut().for_each(|f| f.swap(1, 2));
+        flipped = m;
+        &flipped
+    } else {
+        output
+    };
     let near = Ball {
         center: region.center,
         radius: 2.0 * region.radius,
@@ -1120,9 +1125,9 @@ fn facing_in_near(output: &TriMesh, region: &Ball, inward: bool, h: f64) -> usiz
                 .any(|&v| near.contains(&mesh.vertices[v as usize]))
         })
         .collect();
-    let winding = WindingNumber::new(&mesh, WindingOptions::SIDES);
-    let eps = 0.1 * mean_edge_length(&mesh).min(h);
-    faces_not_facing_out(&mesh, &winding, &faces, eps)
+    let winding = WindingNumber::new(mesh, WindingOptions::SIDES);
+    let eps = 0.1 * mean_edge_length(mesh).min(h);
+    faces_not_facing_out(mesh, &winding, &faces, eps)
 }
 
 /// How the user tells ours where D is on the case in `dir`: `--holes` (chop), the point picked
