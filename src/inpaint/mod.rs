@@ -24,5 +24,6 @@ pub mod repair_budget;
 pub mod shave;
 pub mod stitch;
 pub mod topology;
+pub mod tunnel;
 pub mod wall_chart;
 pub mod widen;

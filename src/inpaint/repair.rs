@@ -16,7 +16,9 @@
 //!    wall beside the hole (`known_wall`: only the hole's cap is unknown there), remove pieces that float in D or voids sealed in
 //!    it (`topology`), redistance near the surface (not after the axial fill, whose values are
 //!    distances already).
-//! 4. Mesh: marching cubes of the filled φ (closed specks smaller than a cell dropped); with
+//! 4. Mesh: marching cubes of the filled φ (closed specks smaller than a cell dropped; a patch
+//!    with more handles than the input's genus has a tunnel through the vessel, and step 3's
+//!    field is closed in D by the smallest radius that removes it, `tunnel`); with
 //!    `keep_outside`, stitch the part deep in D into the input's triangles outside D, and when
 //!    that fails at every cut depth, once more `STITCH_BEYOND_VOXELS` beyond D; when that fails
 //!    too (or without `keep_outside`), re-mesh the whole vessel with the filled sub-box. The
@@ -40,6 +42,7 @@ use super::region::{deepest_ball, Ball};
 use super::shave::shave_bumps;
 use super::stitch::{cut_out, stitch_patch_checked, without_specks, CutOut};
 use super::topology::remove_islands;
+use super::tunnel::{close_inside, closing_radii};
 use crate::bvh::{bound_by_triangle, MeshBvh};
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
@@ -49,7 +52,7 @@ use crate::levelset::marching_cubes::{extract_surface, ExtractOptions};
 use crate::levelset::redistance::{redistance, RedistanceOptions, RedistanceScheme};
 use crate::levelset::voxelize::{voxelize, VoxelizeOptions};
 use crate::mesh::cap::{cap_holes, CapOptions};
-use crate::mesh::measures::{bounding_box, mean_edge_length};
+use crate::mesh::measures::{bounding_box, genus, handles, mean_edge_length};
 use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
 use crate::mesh::units::typical_vessel_radius;
@@ -720,7 +723,11 @@ pub(crate) fn repair_awaiting<'h>(
     // most), the fine field being finished only for the whole-vessel re-mesh. The motions'
     // fields, redistanced afterwards, are finished on the fine grid.
     let patch_stride = patch_stride(radius_estimate, h, mean_edge);
-    let finish = |phi0: &Grid3, mut psi: Grid3, mut weights: Vec<f32>, unknown: &[bool]| {
+    let finish = |phi0: &Grid3,
+                  mut psi: Grid3,
+                  mut weights: Vec<f32>,
+                  unknown: &[bool],
+                  close: Option<f64>| {
         let cap_outside = finish_fill(
             &closed_input,
             cap_faces.clone(),
@@ -730,8 +737,9 @@ pub(crate) fn repair_awaiting<'h>(
             &mut psi,
             &mut weights,
             unknown,
+            close,
             h,
-        );
+        )?;
         // Marching cubes needs distances near the surface only. The axial and centreline fills
         // give distances, which are already that; the flows' and msr's fields are redistanced
         // first.
@@ -747,47 +755,85 @@ pub(crate) fn repair_awaiting<'h>(
         Ok::<_, Error>((psi, cap_outside))
     };
     let coarse = patch_stride > 1 && !opts.method.is_motion();
-    let ((field, mut cap_outside), unfinished) = if coarse {
+    let coarse_nodes = if coarse {
         let nodes = |values: &[f32]| {
             Grid3::from_data(dims, transform, values.to_vec())
                 .and_then(|g| g.subsample(patch_stride))
                 .map(Grid3::into_data)
         };
-        let coarse_phi0 = phi0.subsample(patch_stride)?;
-        let coarse_unknown = region_mask(&nodes(&depth)?);
-        let field = finish(
-            &coarse_phi0,
-            psi.subsample(patch_stride)?,
+        Some((
+            phi0.subsample(patch_stride)?,
+            region_mask(&nodes(&depth)?),
             nodes(&weights)?,
-            &coarse_unknown,
-        )?;
-        (field, Some((psi, weights)))
+        ))
     } else {
-        (finish(&phi0, psi, weights, &unknown)?, None)
+        None
     };
-    lap("fill", &mut timings);
+    // The field finished (closed by `close`, world units: see `tunnel`), on the patch's nodes
+    // when coarse, and its patch: the marching cubes on every `patch_stride`-th node, without
+    // the closed pieces smaller than one of its cells (the grid's noise, no part of the vessel).
+    let finished = |close: Option<f64>| {
+        let (field, cap_outside) = match &coarse_nodes {
+            Some((coarse_phi0, coarse_unknown, coarse_weights)) => finish(
+                coarse_phi0,
+                psi.subsample(patch_stride)?,
+                coarse_weights.clone(),
+                coarse_unknown,
+                close,
+            )?,
+            None => finish(&phi0, psi.clone(), weights.clone(), &unknown, close)?,
+        };
+        let patch = if coarse || patch_stride == 1 {
+            // The finished field itself (already on the patch's nodes).
+            extract_surface(&field, &ExtractOptions::default())
+        } else {
+            field
+                .subsample(patch_stride)
+                .and_then(|g| extract_surface(&g, &ExtractOptions::default()))
+        }?;
+        let patch = without_specks(patch, (patch_stride as f64 * h).powi(3));
+        Ok::<_, Error>((field, cap_outside, patch))
+    };
     // Stitched into the kept triangles, or (without keep_outside, or when that fails) the whole
     // vessel re-meshed. Every cut depth is tried until a stitch passes the self-checks
     // (`checks`: no face inside the solid, no long stitch edges, outward, no volume lost in D;
-    // they need a closed result). What the checks measure on the input, meanwhile.
-    let (patch, checks) = rayon::join(
+    // they need a closed result). What the checks measure on the input, meanwhile (the cap's
+    // volume the union leaves out does not depend on a closing, which only adds inside D).
+    let (unclosed, (input_genus, checks)) = rayon::join(
+        || finished(None),
         || {
-            if coarse || patch_stride == 1 {
-                // The finished field itself (already on the patch's nodes).
-                extract_surface(&field, &ExtractOptions::default())
-            } else {
-                field
-                    .subsample(patch_stride)
-                    .and_then(|g| extract_surface(&g, &ExtractOptions::default()))
-            }
-        },
-        || {
-            (opts.keep_outside && cut.open_edges == 0)
-                .then(|| RepairChecks::new(&closed_input, balls, 3.0 * h).allowing(&cap_outside))
+            let checks = (opts.keep_outside && cut.open_edges == 0)
+                .then(|| RepairChecks::new(&closed_input, balls, 3.0 * h));
+            (genus(&closed_input), checks)
         },
     );
-    // Closed pieces smaller than one of its cells are the grid's noise, no part of the vessel.
-    let patch = without_specks(patch?, (patch_stride as f64 * h).powi(3));
+    let (mut field, mut cap_outside, mut patch) = unclosed?;
+    // A handle the input does not have (`tunnel`): the field closed by the smallest radius that
+    // removes it, or, when none does, kept as it is, with a notice either way.
+    let mut tunnel_closing = None;
+    if let (Some(g), Some(p)) = (input_genus, handles(&patch)) {
+        if p > g {
+            for r in closing_radii(radius_estimate) {
+                let again = finished(Some(r))?;
+                if handles(&again.2).is_some_and(|q| q <= g) {
+                    tunnel_closing = Some(r);
+                    (field, cap_outside, patch) = again;
+                    break;
+                }
+            }
+            notices.push(match tunnel_closing {
+                Some(r) => format!(
+                    "the fill left a tunnel through the vessel in D (the surface's genus {p} where the input's is {g}): closed by a morphological closing of radius {r:.3}"
+                ),
+                None => format!(
+                    "the repaired surface has a tunnel through the vessel in D (its genus {p} where the input's is {g}) that closings up to half the vessel's radius did not remove"
+                ),
+            });
+        }
+    }
+    let unfinished = coarse.then_some((psi, weights));
+    lap("fill", &mut timings);
+    let checks = checks.map(|c| c.allowing(&cap_outside));
     let stitch_in = |cut: &CutOut, balls: &[Ball]| {
         stitch_patch_checked(
             cut,
@@ -835,7 +881,8 @@ pub(crate) fn repair_awaiting<'h>(
             {
                 let fine = match unfinished {
                     Some((psi, weights)) => {
-                        let (fine, fine_cap_outside) = finish(&phi0, psi, weights, &unknown)?;
+                        let (fine, fine_cap_outside) =
+                            finish(&phi0, psi, weights, &unknown, tunnel_closing)?;
                         cap_outside = fine_cap_outside;
                         fine
                     }
@@ -899,8 +946,9 @@ fn finish_fill(
     psi: &mut Grid3,
     weights: &mut [f32],
     unknown: &[bool],
+    close: Option<f64>,
     h: f64,
-) -> Vec<f64> {
+) -> Result<Vec<f64>> {
     let (cap_only, cap_outside) = match HoleWall::new(closed_input, cap_faces, balls, intact_lumen)
     {
         Some(holes) => {
@@ -918,9 +966,12 @@ fn finish_fill(
                 *v = v.min(k);
             }
         });
+    if let Some(r) = close {
+        close_inside(psi, weights, r)?;
+    }
     blend_known(psi, phi0, weights);
     remove_islands(psi, unknown);
-    cap_outside
+    Ok(cap_outside)
 }
 
 /// The largest inside distance of `phi0` over the nodes outside D within `reach` of it (`depth`

@@ -278,6 +278,25 @@ pub fn genus(mesh: &TriMesh) -> Option<i64> {
     genus_of(&map, &map.summary(), n, map.non_manifold_vertices())
 }
 
+/// Handles of a surface that may have boundary (an open vessel, a patch cut by a box): the
+/// genus of the closed surface its boundary loops would bound if each were capped by a disk,
+/// g = (2·components − χ − loops)/2. `None` unless every edge has one or two faces, every vertex
+/// is manifold and the faces are oriented consistently.
+pub fn handles(mesh: &TriMesh) -> Option<i64> {
+    let map = EdgeMap::new(mesh);
+    let edges = map.summary();
+    if mesh.faces.is_empty()
+        || edges.non_manifold_edges > 0
+        || map.non_manifold_vertices() > 0
+        || !edges.consistent
+    {
+        return None;
+    }
+    let (n, _) = connected_components(mesh);
+    let twice = 2 * n as i64 - euler_characteristic_of(&map) - map.boundary_loops().len() as i64;
+    (twice >= 0 && twice % 2 == 0).then_some(twice / 2)
+}
+
 pub(crate) fn genus_of(
     map: &EdgeMap,
     edges: &EdgeSummary,
