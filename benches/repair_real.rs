@@ -54,7 +54,9 @@
 //! centre that do not face out (winding number probed in front of and behind each:
 //! `inpaint::checks::faces_not_facing_out`; a slit, or a triangle folded over, as the stitch's
 //! shortest seam left 1–4 per output before; also a crease or sliver thinner than the probe's
-//! offset, and an input's own folds that an output keeps); seconds. A failed output counts as
+//! offset, and an input's own folds that an output keeps); whether it has more handles than the
+//! truth (`mesh::measures::handles`: a tunnel through the vessel; counted per tool under the
+//! table); seconds. A failed output counts as
 //! an infinite Hausdorff distance. For the stenosis, the NASCET and diameter stenosis our report
 //! gives for the damaged input. Then per tool: the medians, the cases within 1.5h and 5% and
 //! within 3h, and on how many cases ours beats each peer (smaller Hausdorff in D, as printed to
@@ -366,7 +368,7 @@ use vesselmsr::inpaint::region::{local_vessel_radius, write_regions, Ball};
 use vesselmsr::io::{read_mesh, write_mesh};
 use vesselmsr::mesh::cap::{cap_holes, CapOptions};
 use vesselmsr::mesh::info::mesh_info;
-use vesselmsr::mesh::measures::{bounding_box, mean_edge_length};
+use vesselmsr::mesh::measures::{bounding_box, handles, mean_edge_length};
 use vesselmsr::mesh::topology::{boundary_loops, connected_components};
 use vesselmsr::TriMesh;
 
@@ -478,6 +480,9 @@ struct Outcome {
     /// triangle folded over, or a feature thinner than the probe's offset:
     /// `faces_not_facing_out`); None for a surface that is not closed.
     facing_in: Option<usize>,
+    /// Handles the output has beyond the truth's (a tunnel through the vessel:
+    /// `mesh::measures::handles`, open ends counted as capped); None when either cannot be told.
+    extra_handles: Option<i64>,
     seconds: f64,
     /// Why there is no output.
     error: Option<String>,
@@ -491,6 +496,7 @@ impl Outcome {
             watertight: false,
             components: 0,
             facing_in: None,
+            extra_handles: None,
             seconds,
             error: Some(why),
         }
@@ -1096,6 +1102,7 @@ fn judge(output: &TriMesh, truth: &TriMesh, region: &Ball, h: f64, seconds: f64)
         facing_in: info
             .watertight
             .then(|| facing_in_near(output, region, info.signed_volume < 0.0, h)),
+        extra_handles: handles(output).zip(handles(truth)).map(|(o, t)| o - t),
         seconds,
         error: None,
     }
@@ -1596,6 +1603,26 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
     println!(
         "  faces within 2 radii of D that do not face out (closed outputs): {}",
         facing.join("; ")
+    );
+    // Outputs with a handle the truth does not have: a tunnel through the vessel.
+    let tunnels: Vec<String> = tools
+        .iter()
+        .enumerate()
+        .map(|(t, tool)| {
+            let extra: Vec<i64> = results
+                .iter()
+                .filter_map(|r| r.outcomes[t].as_ref().and_then(|o| o.extra_handles))
+                .collect();
+            format!(
+                "{tool} {} of {}",
+                extra.iter().filter(|&&n| n > 0).count(),
+                extra.len()
+            )
+        })
+        .collect();
+    println!(
+        "  outputs with more handles than the truth (a tunnel through the vessel): {}",
+        tunnels.join("; ")
     );
     // Ours by how the regions were filled (the report's `fill`): where the fill is least sure.
     let mut fills: Vec<&str> = results.iter().map(|r| r.our_fill.as_str()).collect();

@@ -6,7 +6,7 @@ use std::collections::HashSet;
 use std::f64::consts::TAU;
 use vesselmsr::mesh::info::mesh_info;
 use vesselmsr::mesh::measures::{
-    area_centroid, euler_characteristic, genus, signed_volume, signed_volume_about,
+    area_centroid, euler_characteristic, genus, handles, signed_volume, signed_volume_about,
 };
 use vesselmsr::mesh::orient::{orient_consistently, orient_outward};
 use vesselmsr::mesh::primitives::{self, box_mesh, open_tube};
@@ -164,6 +164,25 @@ fn torus_has_genus_one() {
     two.append(&cube_at(p(10., 0., 0.), [1., 1., 1.]));
     assert_eq!(euler_characteristic(&two), 2);
     assert_eq!(genus(&two), Some(1));
+}
+
+/// Handles with the boundary loops counted as capped: an open tube has none, a torus one, and
+/// still one with a face cut out of it (a hole: one boundary loop) or beside an open tube.
+#[test]
+fn handles_count_a_torus_with_a_hole_and_not_an_open_tube() {
+    let tube = open_tube(1.0, 4.0, 16, 8);
+    assert_eq!(genus(&tube), None);
+    assert_eq!(handles(&tube), Some(0));
+    let mut holed = torus(24, 12);
+    holed.faces.remove(7);
+    assert_eq!(boundary_loops(&holed).len(), 1);
+    assert_eq!((genus(&holed), handles(&holed)), (None, Some(1)));
+    let mut both = torus(16, 8);
+    let mut far = open_tube(1.0, 4.0, 16, 8);
+    far.vertices.iter_mut().for_each(|v| v.x += 20.0);
+    both.append(&far);
+    assert_eq!(handles(&both), Some(1));
+    assert_eq!(handles(&torus(24, 12)), genus(&torus(24, 12)));
 }
 
 #[test]

@@ -87,7 +87,7 @@ use super::wall_chart::fill_with_tension;
 use super::widen::plan_widening;
 use crate::bvh::{MeshBvh, RayHit};
 use crate::centerline::healthy::HealthyVessel;
-use crate::centerline::{Centerline, EndKind};
+use crate::centerline::{Branch, Centerline, EndKind};
 use crate::grid::Grid3;
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
@@ -536,6 +536,19 @@ fn plan_group(
     // of at least a third of the widest anchor's. The same vessel reached twice (a run that
     // leaves E right where another enters) counts once.
     let widest = stubs.iter().map(|s| s.anchor.radius).fold(0.0, f64::max);
+    // An anchor that seems too thin next to its branch's open end may be the end's inscribed
+    // sphere, not the vessel's (`radii_clear_of_open_ends`): the section's radius is taken for
+    // a branch that leaves D only there (a branch from a junction in D to its open end just
+    // beyond E: dropped, the junction lost it). A run across E that leaves it by its open end
+    // keeps its other anchor alone, which is then bridged to that end's cut.
+    for s in &mut stubs {
+        if s.partner.is_none() && s.anchor.radius < widest / 3.0 {
+            if let Some(br) = s.anchor.branch.map(|b| &centerline.branches[b]) {
+                let r = radii_clear_of_open_ends(br, bvh, 4.0 * widest)[s.anchor.index];
+                s.anchor.radius = s.anchor.radius.max(r);
+            }
+        }
+    }
     let mut keep: Vec<bool> = stubs
         .iter()
         .map(|s| s.outside >= s.anchor.radius && s.anchor.radius >= widest / 3.0)
@@ -1274,6 +1287,66 @@ fn any_perpendicular(t: &Vector3<f64>) -> Vector3<f64> {
         Vector3::y()
     };
     t.cross(&helper).normalize()
+}
+
+/// Rays in a section plane that measure a vessel's radius next to an open end.
+const END_SECTION_RAYS: usize = 16;
+
+/// The inscribed radius of `br` at each of its points, except where the inscribed sphere is the
+/// open end's and not the vessel's: the centreline is traced on the capped input, so within a
+/// section's radius of an open end the sphere touches the cap before the wall, and the radius
+/// falls to 0 at the end (a branch of 0.9 radii read 0.44 a fifth of a radius from its end, and
+/// was dropped as a spur of the damage: seed 28's aneurysm junction chop in `benches/repair_real`).
+/// There, the median distance to the wall along [`END_SECTION_RAYS`] rays in the section plane
+/// (within `reach`), when that is larger and the end is nearer than it.
+fn radii_clear_of_open_ends(br: &Branch, bvh: &MeshBvh, reach: f64) -> Vec<f64> {
+    let n = br.points.len();
+    let mut radii = br.radius.clone();
+    if n < 2 {
+        return radii;
+    }
+    let steps: Vec<f64> = br.points.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
+    let mut fix = |order: &mut dyn Iterator<Item = usize>, back: &dyn Fn(usize) -> f64| {
+        let mut from_end = 0.0;
+        for i in order {
+            from_end += back(i);
+            if from_end > reach {
+                break;
+            }
+            let (c, t) = (br.points[i], br.tangent[i]);
+            let u = any_perpendicular(&t);
+            let v = t.cross(&u);
+            let mut hits: Vec<f64> = (0..END_SECTION_RAYS)
+                .filter_map(|j| {
+                    let th = TAU * j as f64 / END_SECTION_RAYS as f64;
+                    bvh.cast_ray(&c, &(u * th.cos() + v * th.sin()), reach)
+                        .map(|hit| hit.t)
+                        .filter(|&d| d > 0.0)
+                })
+                .collect();
+            if hits.len() * 2 < END_SECTION_RAYS {
+                continue;
+            }
+            hits.sort_by(f64::total_cmp);
+            let wall = hits[hits.len() / 2];
+            if from_end < wall {
+                radii[i] = radii[i].max(wall);
+            }
+        }
+    };
+    if br.start == EndKind::OpenEnd {
+        fix(&mut (0..n), &|i| if i == 0 { 0.0 } else { steps[i - 1] });
+    }
+    if br.end == EndKind::OpenEnd {
+        fix(&mut (0..n).rev(), &|i| {
+            if i == n - 1 {
+                0.0
+            } else {
+                steps[i]
+            }
+        });
+    }
+    radii
 }
 
 /// Tangents (central differences) and rotation-minimising frames along `pts`, the first frame
@@ -2376,6 +2449,41 @@ mod tests {
         assert_eq!((end.radius, end.clear), (1.5, false));
         let far = |p: &Point3<f64>| (p - Point3::new(0.0, 0.0, 8.0)).norm() < 4.0;
         assert!(open_end_in(&centerline, &far, &from).is_none());
+    }
+
+    /// A capped tube of radius 1 along z from 0 to 8, open at z = 0: its centreline's inscribed
+    /// radius falls to the distance to the cap within a radius of the end; the section's rays
+    /// read the tube's radius there, and farther in (and at the closed end) nothing changes.
+    #[test]
+    fn the_radius_next_to_an_open_end_is_the_sections() {
+        use crate::mesh::cap::{cap_holes, CapOptions};
+        use crate::mesh::primitives::open_tube;
+        let (capped, _) = cap_holes(&open_tube(1.0, 8.0, 48, 33), &CapOptions::default()).unwrap();
+        let bvh = MeshBvh::new(&capped);
+        let mut br = line_branch(
+            0,
+            Point3::origin(),
+            Point3::new(0.0, 0.0, 8.0),
+            EndKind::OpenEnd,
+            EndKind::End,
+        );
+        // As traced on the capped tube: the distance to the nearer cap where under the radius.
+        br.radius = br
+            .points
+            .iter()
+            .map(|p| p.z.min(8.0 - p.z).min(1.0))
+            .collect();
+        let radii = radii_clear_of_open_ends(&br, &bvh, 4.0);
+        let n = radii.len();
+        for (i, p) in br.points.iter().enumerate() {
+            if p.z > 0.0 && p.z < 0.95 {
+                assert!((radii[i] - 1.0).abs() < 0.01, "{} at z = {}", radii[i], p.z);
+            } else if p.z > 1.05 {
+                assert_eq!(radii[i], br.radius[i], "at z = {}", p.z);
+            }
+        }
+        // The closed end's (a tip of the skeleton) is left as traced.
+        assert!(radii[n - 2] < 0.2);
     }
 
     #[test]
