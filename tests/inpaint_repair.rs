@@ -11,7 +11,7 @@ use nalgebra::Point3;
 use std::collections::HashSet;
 use vesselmsr::bvh::MeshBvh;
 use vesselmsr::inpaint::phantom::{make_phantom, Phantom, PhantomKind, PhantomOptions};
-use vesselmsr::inpaint::pipeline::{repair_vessel, VesselRepair};
+use vesselmsr::inpaint::pipeline::{repair_vessel, RepairedVessel, VesselRepair};
 use vesselmsr::inpaint::region::Ball;
 use vesselmsr::inpaint::repair::{region_margin, repair, InpaintMethod, Repair, RepairOptions};
 use vesselmsr::mesh::info::mesh_info;
@@ -816,6 +816,25 @@ fn the_centreline_traced_meanwhile_gives_the_same_repair() {
     }
 }
 
+/// A chop of `benches/repair_real` given as its region D (the chop is D over 1.3) on `truth`,
+/// repaired with `--holes`: the repair, and its Hausdorff distance (voxels) and volume error in
+/// D against `judged` (the truth with its open ends capped flat, as the benchmark judges).
+fn repair_bench_chop(truth: &TriMesh, judged: &TriMesh, d: Ball) -> (RepairedVessel, f64, f64) {
+    let chop = Ball {
+        center: d.center,
+        radius: d.radius / 1.3,
+    };
+    let damaged = common::chopped(truth, &chop);
+    let request = VesselRepair {
+        holes: true,
+        ..VesselRepair::default()
+    };
+    let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
+    let hd = hausdorff_in(&done.mesh, judged, &[d]) / done.report.parameters.voxel;
+    let ve = volume_error_in(&done.mesh, judged, &[d]);
+    (done, hd, ve)
+}
+
 /// The aneurysm's junction chop in `benches/repair_real`'s draw of seed 28 (held out): its small
 /// branch leaves the junction inside D for its open end just beyond D. The inscribed sphere
 /// there is the end's (0.44 where the vessel's radius is 0.9): the branch was dropped as a spur
@@ -832,21 +851,10 @@ fn a_branch_from_a_junction_in_d_to_an_open_end_beside_it_is_kept() {
         center: Point3::new(35.02669712897357, 33.07199631189985, 42.14149070000435),
         radius: 2.1173428676708927,
     };
-    let chop = Ball {
-        center: d.center,
-        radius: d.radius / 1.3,
-    };
-    let damaged = common::chopped(&truth, &chop);
-    let request = VesselRepair {
-        holes: true,
-        ..VesselRepair::default()
-    };
-    let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
+    let (done, hd, ve) = repair_bench_chop(&truth, &judged, d);
     let p = &done.report.parameters;
     assert_eq!(done.report.regions[0].fill, Some("junction"));
     assert!(p.stitched, "{:?}", p.fallback);
-    let hd = hausdorff_in(&done.mesh, &judged, &[d]) / p.voxel;
-    let ve = volume_error_in(&done.mesh, &judged, &[d]);
     println!(
         "seed 28's ICA junction chop: {hd:.2}h, {:+.1}% in D",
         100.0 * ve
@@ -892,24 +900,13 @@ fn a_branch_bitten_off_with_its_open_end_is_restored_to_its_cut() {
             center: Point3::from(centre),
             radius,
         };
-        let chop = Ball {
-            center: d.center,
-            radius: d.radius / 1.3,
-        };
-        let damaged = common::chopped(&truth, &chop);
-        let request = VesselRepair {
-            holes: true,
-            ..VesselRepair::default()
-        };
-        let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
+        let (done, hd, ve) = repair_bench_chop(&truth, &judged, d);
         let p = &done.report.parameters;
         assert_eq!(done.report.regions.len(), 1);
         assert_eq!(done.report.regions[0].fill, Some("junction"));
         assert!(p.stitched, "{:?}", p.fallback);
         assert!(mesh_info(&done.mesh).watertight);
         assert_eq!(connected_components(&done.mesh).0, 1);
-        let hd = hausdorff_in(&done.mesh, &judged, &[d]) / p.voxel;
-        let ve = volume_error_in(&done.mesh, &judged, &[d]);
         println!(
             "bitten ICA end at {centre:?}: {hd:.2}h, {:+.1}% in D",
             100.0 * ve
