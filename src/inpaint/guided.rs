@@ -537,14 +537,14 @@ fn plan_group(
     // leaves E right where another enters) counts once.
     let widest = stubs.iter().map(|s| s.anchor.radius).fold(0.0, f64::max);
     // An anchor that seems too thin next to its branch's open end may be the end's inscribed
-    // sphere, not the vessel's (`radii_clear_of_open_ends`): the section's radius is taken for
+    // sphere, not the vessel's (`radius_clear_of_open_ends`): the section's radius is taken for
     // a branch that leaves D only there (a branch from a junction in D to its open end just
     // beyond E: dropped, the junction lost it). A run across E that leaves it by its open end
     // keeps its other anchor alone, which is then bridged to that end's cut.
     for s in &mut stubs {
         if s.partner.is_none() && s.anchor.radius < widest / 3.0 {
             if let Some(br) = s.anchor.branch.map(|b| &centerline.branches[b]) {
-                let r = radii_clear_of_open_ends(br, bvh, 4.0 * widest)[s.anchor.index];
+                let r = radius_clear_of_open_ends(br, s.anchor.index, bvh, 4.0 * widest);
                 s.anchor.radius = s.anchor.radius.max(r);
             }
         }
@@ -1292,61 +1292,50 @@ fn any_perpendicular(t: &Vector3<f64>) -> Vector3<f64> {
 /// Rays in a section plane that measure a vessel's radius next to an open end.
 const END_SECTION_RAYS: usize = 16;
 
-/// The inscribed radius of `br` at each of its points, except where the inscribed sphere is the
-/// open end's and not the vessel's: the centreline is traced on the capped input, so within a
-/// section's radius of an open end the sphere touches the cap before the wall, and the radius
-/// falls to 0 at the end (a branch of 0.9 radii read 0.44 a fifth of a radius from its end, and
-/// was dropped as a spur of the damage: seed 28's aneurysm junction chop in `benches/repair_real`).
-/// There, the median distance to the wall along [`END_SECTION_RAYS`] rays in the section plane
-/// (within `reach`), when that is larger and the end is nearer than it.
-fn radii_clear_of_open_ends(br: &Branch, bvh: &MeshBvh, reach: f64) -> Vec<f64> {
+/// The radius of `br` at its point `i`: the inscribed radius, unless an open end of the branch
+/// lies nearer along it than the wall does in the section plane there. The centreline is traced
+/// on the capped input, so within a section's radius of an open end the inscribed sphere touches
+/// the cap before the wall and falls to 0 at the end (a branch of 0.9 radii read 0.44 a fifth of
+/// a radius from its end, and was dropped as a spur of the damage: seed 28's aneurysm junction
+/// chop in `benches/repair_real`); there, the median distance to the wall along
+/// [`END_SECTION_RAYS`] rays in the section plane (within `reach`), when that is larger.
+fn radius_clear_of_open_ends(br: &Branch, i: usize, bvh: &MeshBvh, reach: f64) -> f64 {
     let n = br.points.len();
-    let mut radii = br.radius.clone();
-    if n < 2 {
-        return radii;
-    }
-    let steps: Vec<f64> = br.points.windows(2).map(|w| (w[1] - w[0]).norm()).collect();
-    let mut fix = |order: &mut dyn Iterator<Item = usize>, back: &dyn Fn(usize) -> f64| {
-        let mut from_end = 0.0;
-        for i in order {
-            from_end += back(i);
-            if from_end > reach {
-                break;
-            }
-            let (c, t) = (br.points[i], br.tangent[i]);
-            let u = any_perpendicular(&t);
-            let v = t.cross(&u);
-            let mut hits: Vec<f64> = (0..END_SECTION_RAYS)
-                .filter_map(|j| {
-                    let th = TAU * j as f64 / END_SECTION_RAYS as f64;
-                    bvh.cast_ray(&c, &(u * th.cos() + v * th.sin()), reach)
-                        .map(|hit| hit.t)
-                        .filter(|&d| d > 0.0)
-                })
-                .collect();
-            if hits.len() * 2 < END_SECTION_RAYS {
-                continue;
-            }
-            hits.sort_by(f64::total_cmp);
-            let wall = hits[hits.len() / 2];
-            if from_end < wall {
-                radii[i] = radii[i].max(wall);
-            }
-        }
+    let arc = |a: usize, b: usize| -> f64 {
+        br.points[a.min(b)..=a.max(b)]
+            .windows(2)
+            .map(|w| (w[1] - w[0]).norm())
+            .sum()
     };
-    if br.start == EndKind::OpenEnd {
-        fix(&mut (0..n), &|i| if i == 0 { 0.0 } else { steps[i - 1] });
+    let to_end = [(br.start, 0), (br.end, n - 1)]
+        .iter()
+        .filter(|(kind, _)| *kind == EndKind::OpenEnd)
+        .map(|&(_, end)| arc(i, end))
+        .fold(f64::INFINITY, f64::min);
+    if to_end > reach {
+        return br.radius[i];
     }
-    if br.end == EndKind::OpenEnd {
-        fix(&mut (0..n).rev(), &|i| {
-            if i == n - 1 {
-                0.0
-            } else {
-                steps[i]
-            }
-        });
+    let (c, t) = (br.points[i], br.tangent[i]);
+    let u = any_perpendicular(&t);
+    let v = t.cross(&u);
+    let mut hits: Vec<f64> = (0..END_SECTION_RAYS)
+        .filter_map(|j| {
+            let th = TAU * j as f64 / END_SECTION_RAYS as f64;
+            bvh.cast_ray(&c, &(u * th.cos() + v * th.sin()), reach)
+                .map(|hit| hit.t)
+                .filter(|&d| d > 0.0)
+        })
+        .collect();
+    if hits.len() * 2 < END_SECTION_RAYS {
+        return br.radius[i];
     }
-    radii
+    hits.sort_by(f64::total_cmp);
+    let wall = hits[hits.len() / 2];
+    if to_end < wall {
+        br.radius[i].max(wall)
+    } else {
+        br.radius[i]
+    }
 }
 
 /// Tangents (central differences) and rotation-minimising frames along `pts`, the first frame
@@ -2473,7 +2462,9 @@ mod tests {
             .iter()
             .map(|p| p.z.min(8.0 - p.z).min(1.0))
             .collect();
-        let radii = radii_clear_of_open_ends(&br, &bvh, 4.0);
+        let radii: Vec<f64> = (0..br.points.len())
+            .map(|i| radius_clear_of_open_ends(&br, i, &bvh, 4.0))
+            .collect();
         let n = radii.len();
         for (i, p) in br.points.iter().enumerate() {
             if p.z > 0.0 && p.z < 0.95 {
