@@ -1485,6 +1485,27 @@ fn print_row(case: &str, tool: &str, o: &Outcome) {
     );
 }
 
+/// Per tool, "{tool} {shown}": `shown` of the values `field` gives on its outputs (those it has).
+fn per_tool<T>(
+    results: &[CaseResult],
+    tools: &[&str],
+    field: impl Fn(&Outcome) -> Option<T>,
+    shown: impl Fn(&[T]) -> String,
+) -> String {
+    tools
+        .iter()
+        .enumerate()
+        .map(|(t, tool)| {
+            let values: Vec<T> = results
+                .iter()
+                .filter_map(|r| r.outcomes[t].as_ref().and_then(&field))
+                .collect();
+            format!("{tool} {}", shown(&values))
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
 fn print_vessel_table(results: &[CaseResult], tools: &[&str]) {
     println!(
         "  {:<22} {:<11} {:>8} {:>9} {:>10} {:>5} {:>9} {:>8}",
@@ -1584,45 +1605,33 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
     }
     // Faces near D that do not face out, per tool, over its closed outputs (a fold of the seam,
     // a slit; an input's own folds outside D count for every tool that keeps them).
-    let facing: Vec<String> = tools
-        .iter()
-        .enumerate()
-        .map(|(t, tool)| {
-            let counts: Vec<usize> = results
-                .iter()
-                .filter_map(|r| r.outcomes[t].as_ref().and_then(|o| o.facing_in))
-                .collect();
-            format!(
-                "{tool} {} in {} of {}",
+    println!(
+        "  faces within 2 radii of D that do not face out (closed outputs): {}",
+        per_tool(
+            results,
+            tools,
+            |o| o.facing_in,
+            |counts| format!(
+                "{} in {} of {}",
                 counts.iter().sum::<usize>(),
                 counts.iter().filter(|&&n| n > 0).count(),
                 counts.len()
             )
-        })
-        .collect();
-    println!(
-        "  faces within 2 radii of D that do not face out (closed outputs): {}",
-        facing.join("; ")
+        )
     );
     // Outputs with a handle the truth does not have: a tunnel through the vessel.
-    let tunnels: Vec<String> = tools
-        .iter()
-        .enumerate()
-        .map(|(t, tool)| {
-            let extra: Vec<i64> = results
-                .iter()
-                .filter_map(|r| r.outcomes[t].as_ref().and_then(|o| o.extra_handles))
-                .collect();
-            format!(
-                "{tool} {} of {}",
+    println!(
+        "  outputs with more handles than the truth (a tunnel through the vessel): {}",
+        per_tool(
+            results,
+            tools,
+            |o| o.extra_handles,
+            |extra| format!(
+                "{} of {}",
                 extra.iter().filter(|&&n| n > 0).count(),
                 extra.len()
             )
-        })
-        .collect();
-    println!(
-        "  outputs with more handles than the truth (a tunnel through the vessel): {}",
-        tunnels.join("; ")
+        )
     );
     // Ours by how the regions were filled (the report's `fill`): where the fill is least sure.
     let mut fills: Vec<&str> = results.iter().map(|r| r.our_fill.as_str()).collect();
