@@ -554,6 +554,8 @@ struct Vessel {
     /// cap with: the aneurysm's short ICA, whose narrowing's D holds its open end, 24.5h for a
     /// flat cap before).
     judged: TriMesh,
+    /// The handles of `judged` (`mesh::measures::handles`), once.
+    judged_handles: Option<i64>,
     bvh: MeshBvh,
     centerline: Option<Centerline>,
     /// Open-end loop vertices and centreline endpoints.
@@ -1089,8 +1091,9 @@ fn run_limited(cmd: &mut Command, log: &Path, limit: Duration) -> (Result<(), St
     (result, secs)
 }
 
-/// Judges `output` against the truth in D.
-fn judge(output: &TriMesh, truth: &TriMesh, region: &Ball, h: f64, seconds: f64) -> Outcome {
+/// Judges `output` against the vessel's truth in D.
+fn judge(output: &TriMesh, vessel: &Vessel, region: &Ball, h: f64, seconds: f64) -> Outcome {
+    let truth = &vessel.judged;
     let balls = [*region];
     let v_truth = volume_in(truth, &balls);
     let info = mesh_info(output);
@@ -1102,7 +1105,9 @@ fn judge(output: &TriMesh, truth: &TriMesh, region: &Ball, h: f64, seconds: f64)
         facing_in: info
             .watertight
             .then(|| facing_in_near(output, region, info.signed_volume < 0.0, h)),
-        extra_handles: handles(output).zip(handles(truth)).map(|(o, t)| o - t),
+        extra_handles: handles(output)
+            .zip(vessel.judged_handles)
+            .map(|(o, t)| o - t),
         seconds,
         error: None,
     }
@@ -1309,7 +1314,6 @@ fn run_case(
     python: Option<&Path>,
     paper: bool,
 ) -> CaseResult {
-    let truth = &vessel.judged;
     let regions = region_args(dir, case);
     let ours_run = |tag: &str, method: Option<&str>| match &regions {
         Ok(args) => run_ours(dir, tag, args, method),
@@ -1331,7 +1335,7 @@ fn run_case(
     let mut outcomes = Vec::new();
     for (result, secs) in &ours {
         outcomes.push(Some(match result {
-            Ok((mesh, _)) => judge(mesh, truth, &case.region, h, *secs),
+            Ok((mesh, _)) => judge(mesh, vessel, &case.region, h, *secs),
             Err(e) => Outcome::failed(e.clone(), *secs),
         }));
     }
@@ -1358,7 +1362,7 @@ fn run_case(
                         let seconds = t["seconds"].as_f64().unwrap_or(f64::NAN);
                         match (t["output"].as_str(), t["error"].as_str()) {
                             (Some(path), None) => match read_mesh(Path::new(path)) {
-                                Ok(m) => judge(&m, truth, &case.region, h, seconds),
+                                Ok(m) => judge(&m, vessel, &case.region, h, seconds),
                                 Err(e) => Outcome::failed(format!("output: {e}"), seconds),
                             },
                             (_, Some(e)) => Outcome::failed(e.to_string(), seconds),
@@ -1409,7 +1413,7 @@ fn run_case(
         let (all, secs) = run_ours(dir, "ours-stenoses", &["--stenoses".to_string()], None);
         match &all {
             Ok((mesh, r)) => {
-                let o = judge(mesh, truth, &case.region, h, secs);
+                let o = judge(mesh, vessel, &case.region, h, secs);
                 let (_, _, n) = report_stenosis(r, &case.region.center);
                 println!(
                     "    ours with --stenoses instead of the pick: {} h, {} ({n} narrowing(s) \
@@ -1426,7 +1430,7 @@ fn run_case(
         kind: case.kind,
         h,
         h_from_report: voxel.is_some(),
-        input: judge(&case.damaged, truth, &case.region, h, f64::NAN),
+        input: judge(&case.damaged, vessel, &case.region, h, f64::NAN),
         outcomes,
         peers_script,
         meshlib_run,
@@ -1787,6 +1791,7 @@ fn load_vessel(path: &Path) -> Option<Vessel> {
     };
     Some(Vessel {
         name,
+        judged_handles: handles(&judged),
         judged,
         mesh,
         bvh,
