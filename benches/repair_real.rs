@@ -536,13 +536,33 @@ struct CaseResult {
     /// MeshLib run as a user runs it (reference/meshlib_fill.py: Python start-up, import, its
     /// own reader, the fill, its own writer), wall seconds; chops only.
     meshlib_run: Option<f64>,
-    /// Our report's NASCET and diameter stenosis for the damaged input (stenosis case).
-    stenosis: Option<(Option<f64>, Option<f64>)>,
+    /// Our report's stenosis readings at the pick (stenosis case).
+    stenosis: Option<StenosisReading>,
     /// Our report's timings, "name s" each.
     our_timings: String,
     /// How our default repair filled the case's regions (the report's `fill`, joined by "+";
     /// empty: no report).
     our_fill: String,
+}
+
+/// Our report's stenosis figures at the picked narrowing (percent; None: no reading).
+struct StenosisReading {
+    /// NASCET and diameter stenosis on the damaged input.
+    nascet: Option<f64>,
+    diameter: Option<f64>,
+    /// Diameter stenosis on the truth at the same pick: the vessel's own narrowing there (the
+    /// coronary's of seed 26 read 15.7%), against the same kind of healthy reference.
+    own: Option<f64>,
+}
+
+impl StenosisReading {
+    /// The diameter stenosis the damaged input has against the truth's healthy reference: the
+    /// synthetic lesion keeps 1 − DEGREE of the truth's local diameter, itself narrowed by
+    /// `own` (None without the truth's reading).
+    fn expected(&self) -> Option<f64> {
+        self.own
+            .map(|own| 100.0 * (1.0 - (1.0 - own / 100.0) * (1.0 - DEGREE)))
+    }
 }
 
 /// A real vessel, its centreline and where its ends are.
@@ -894,6 +914,9 @@ fn stenosis_case(v: &Vessel, cl: &Centerline, site: &Site, sigma_radii: f64) -> 
     let mut damaged = v.mesh.clone();
     let mut moved = 0;
     let mut centre_ratio = Vec::new();
+    // The moved vertex nearest the centre along the axis: a coarse mesh (the coronary's wall
+    // triangles are about a radius long) may have none within a quarter radius of it.
+    let mut nearest_ratio = (f64::INFINITY, f64::NAN);
     for vertex in damaged.vertices.iter_mut() {
         let (s, c, d) = project(&b.points, &cum, vertex);
         if (s - s0).abs() > MOVE_SIGMAS * sigma || d > MOVE_RADII * r {
@@ -911,14 +934,25 @@ fn stenosis_case(v: &Vessel, cl: &Centerline, site: &Site, sigma_radii: f64) -> 
         if (s - s0).abs() < 0.25 * r {
             centre_ratio.push(f);
         }
+        if (s - s0).abs() < nearest_ratio.0 {
+            nearest_ratio = ((s - s0).abs(), f);
+        }
     }
     Case {
         label: "stenosis 50%".into(),
         slug: "stenosis".into(),
         kind: Kind::Stenosis,
         note: format!(
-            "{moved} vertices moved, radius × {:.3} at the centre (branch {}, s = {})",
-            common::surface::median(centre_ratio),
+            "{moved} vertices moved, radius × {} (branch {}, s = {})",
+            if centre_ratio.is_empty() {
+                format!(
+                    "{:.3} at the vertex nearest the centre, {} along the axis from it",
+                    nearest_ratio.1,
+                    sig(nearest_ratio.0)
+                )
+            } else {
+                format!("{:.3} at the centre", common::surface::median(centre_ratio))
+            },
             site.branch,
             sig(s0)
         ),
@@ -1161,10 +1195,11 @@ fn region_args(dir: &Path, case: &Case) -> Result<Vec<String>, String> {
     })
 }
 
-/// Our whole `repair` command on the case in `dir` with the region flags `regions`, its files
-/// named by `tag`: the output and its report, or why not, and the wall seconds.
+/// Our whole `repair` command on `input` in the case's `dir` with the region flags `regions`,
+/// its files named by `tag`: the output and its report, or why not, and the wall seconds.
 fn run_ours(
     dir: &Path,
+    input: &str,
     tag: &str,
     regions: &[String],
     method: Option<&str>,
@@ -1173,7 +1208,7 @@ fn run_ours(
     let report = dir.join(format!("{tag}.json"));
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_vesselmsr"));
     cmd.arg("repair")
-        .arg(dir.join("damaged.stl"))
+        .arg(dir.join(input))
         .arg("-o")
         .arg(&out)
         .arg("--report")
@@ -1316,7 +1351,7 @@ fn run_case(
 ) -> CaseResult {
     let regions = region_args(dir, case);
     let ours_run = |tag: &str, method: Option<&str>| match &regions {
-        Ok(args) => run_ours(dir, tag, args, method),
+        Ok(args) => run_ours(dir, "damaged.stl", tag, args, method),
         Err(e) => (Err(e.clone()), f64::NAN),
     };
     let mut ours = vec![ours_run("ours", None)];
@@ -1374,12 +1409,28 @@ fn run_case(
             }
         }
     }
-    let stenosis = (case.kind == Kind::Stenosis).then(|| match &report {
-        Some(r) => {
-            let (nascet, diameter, _) = report_stenosis(r, &case.region.center);
-            (nascet, diameter)
+    let stenosis = (case.kind == Kind::Stenosis).then(|| {
+        let (nascet, diameter) = match &report {
+            Some(r) => {
+                let (nascet, diameter, _) = report_stenosis(r, &case.region.center);
+                (nascet, diameter)
+            }
+            None => (None, None),
+        };
+        // The same pick on the truth: the vessel's own narrowing there, if any, which the
+        // synthetic lesion (a fraction of the local radius) narrows further.
+        let own = match &regions {
+            Ok(args) => run_ours(dir, "truth.stl", "truth-pick", args, None).0,
+            Err(e) => Err(e.clone()),
+        };
+        let own = own
+            .ok()
+            .and_then(|(_, r)| report_stenosis(&r, &case.region.center).1);
+        StenosisReading {
+            nascet,
+            diameter,
+            own,
         }
-        None => (None, None),
     });
     let our_fill = report
         .as_ref()
@@ -1410,7 +1461,13 @@ fn run_case(
     if case.kind == Kind::Stenosis {
         // Beside the pick: every narrowing of 20% or more repaired, the vessel's own included
         // (the truth keeps those, so they count against it here).
-        let (all, secs) = run_ours(dir, "ours-stenoses", &["--stenoses".to_string()], None);
+        let (all, secs) = run_ours(
+            dir,
+            "damaged.stl",
+            "ours-stenoses",
+            &["--stenoses".to_string()],
+            None,
+        );
         match &all {
             Ok((mesh, r)) => {
                 let o = judge(mesh, vessel, &case.region, h, secs);
@@ -1531,12 +1588,15 @@ fn print_vessel_table(results: &[CaseResult], tools: &[&str]) {
                 " (the default-voxel rule: ours failed)"
             }
         )];
-        if let Some((nascet, diameter)) = r.stenosis {
+        if let Some(st) = &r.stenosis {
             let pct = |p: Option<f64>| p.map_or("n/a".into(), |p| format!("{p:.1}%"));
             notes.push(format!(
-                "our report on the damaged input: NASCET {}, diameter stenosis {}",
-                pct(nascet),
-                pct(diameter)
+                "our report on the damaged input: NASCET {}, diameter stenosis {} (on the truth \
+                 at the same pick {}: {} expected)",
+                pct(st.nascet),
+                pct(st.diameter),
+                pct(st.own),
+                pct(st.expected())
             ));
         }
         if let Some(s) = r.peers_script {
@@ -1660,6 +1720,27 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
         .collect();
     if !by_fill.is_empty() {
         println!("  ours by fill: {}", by_fill.join(", "));
+    }
+    // The stenosis readings against the lesion made (50% of the truth's local diameter) and
+    // against the one expected from the truth's own reading at the pick.
+    let readings: Vec<&StenosisReading> =
+        results.iter().filter_map(|r| r.stenosis.as_ref()).collect();
+    if !readings.is_empty() {
+        let near = |got: Option<f64>, want: Option<f64>| matches!((got, want), (Some(g), Some(w)) if (g - w).abs() <= 5.0);
+        println!(
+            "  our diameter stenosis at the pick: within 50 ± 5% on {} of {}; within 5 points of \
+             the expected (the truth's own narrowing there counted) on {} of {}",
+            readings
+                .iter()
+                .filter(|s| near(s.diameter, Some(100.0 * DEGREE)))
+                .count(),
+            readings.len(),
+            readings
+                .iter()
+                .filter(|s| near(s.diameter, s.expected()))
+                .count(),
+            readings.len()
+        );
     }
     // Ours (the default method) against each other tool, case by case.
     for (t, tool) in tools.iter().enumerate().skip(1) {
