@@ -329,3 +329,37 @@ fn holes_on_a_mesh_with_only_open_ends() {
         .contains("no holes found (the mesh is closed)"));
     assert_eq!(r["output"]["volume"], r["input"]["volume"]);
 }
+
+#[test]
+fn an_open_end_that_is_not_planar_is_named() {
+    // A tube of radius 2 whose far end is a saddle (z + 0.3 cos 2θ): still taken for an open
+    // end (15% of its radius off its plane), but not the plane a segmentation is clipped by.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut tube = open_tube(2.0, 20.0, 32, 41);
+    for p in tube.vertices.iter_mut().filter(|p| p.z > 19.9) {
+        p.z += 0.3 * (2.0 * p.y.atan2(p.x)).cos();
+    }
+    let bent = d.join("bent.stl");
+    write_mesh(&bent, &tube).unwrap();
+    let out = d.join("out.stl");
+    let (r, stderr) = repair(d, &[s(&bent), "--holes", "-o", s(&out)]);
+    let named: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("is taken for an open vessel end"))
+        .collect();
+    assert_eq!(named.len(), 1, "{stderr}");
+    assert!(
+        named[0].contains(", 20)") && named[0].contains("15%"),
+        "{stderr}"
+    );
+    assert!(r["notices"].to_string().contains("not restored"));
+    assert_eq!(r["loops"][1]["kind"], "open vessel end");
+    // The straight tube's ends are planar: no such notice.
+    write_mesh(&bent, &open_tube(2.0, 20.0, 32, 41)).unwrap();
+    let (_, stderr) = repair(d, &[s(&bent), "--holes", "-o", s(&out)]);
+    assert!(
+        !stderr.contains("is taken for an open vessel end"),
+        "{stderr}"
+    );
+}

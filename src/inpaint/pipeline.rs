@@ -26,6 +26,7 @@ use super::repair_budget;
 use crate::centerline::healthy::HealthyVessel;
 use crate::centerline::stenosis::StenosisFindOptions;
 use crate::centerline::{compute_centerline, CenterlineOptions};
+use crate::error::short_number;
 use crate::mesh::cap::{cap_holes, CapOptions};
 use crate::mesh::decimate::{decimate_mesh, DecimateOptions};
 use crate::mesh::info::mesh_info;
@@ -307,6 +308,15 @@ fn repair_traced(
     let mut loops = Vec::new();
     if request.holes {
         let infos = classify_loops(mesh, &LoopOptions::default());
+        for l in infos.iter().filter(|l| l.is_rough_end()) {
+            let [x, y, z] = [l.center.x, l.center.y, l.center.z].map(short_number);
+            notices.push(format!(
+                "the loop at ({x}, {y}, {z}) is taken for an open vessel end, yet lies {:.0}% of \
+                 its radius off its plane (clipped ends: under 1%): if the damage cut the vessel \
+                 there, what lay beyond is not restored",
+                100.0 * l.planarity,
+            ));
+        }
         if infos.iter().any(|l| l.kind == LoopKind::Hole) {
             let (holes, _) = hole_regions(mesh, &LoopOptions::default())
                 .map_err(|e| e.context(format!("{name}: --holes")))?;
