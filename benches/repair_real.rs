@@ -550,19 +550,13 @@ struct StenosisReading {
     /// NASCET and diameter stenosis on the damaged input.
     nascet: Option<f64>,
     diameter: Option<f64>,
-    /// Diameter stenosis on the truth at the same pick: the vessel's own narrowing there (the
-    /// coronary's of seed 26 read 15.7%), against the same kind of healthy reference.
+    /// Diameter stenosis on the truth at the same pick: the vessel's own narrowing there, if
+    /// any, which the synthetic lesion (half the local diameter) deepens. Context, not an
+    /// oracle: the coronary's of seed 26 read 15.7% (half its local diameter is then 57.9% of
+    /// the healthy reference; our reading on the damaged input 57.2%), but on the truth the
+    /// carotid's region (the narrowest section in it) read 29–36% on 7 of the 13 draws of seeds
+    /// 21–33, where the damaged input read 46–48%.
     own: Option<f64>,
-}
-
-impl StenosisReading {
-    /// The diameter stenosis the damaged input has against the truth's healthy reference: the
-    /// synthetic lesion keeps 1 − DEGREE of the truth's local diameter, itself narrowed by
-    /// `own` (None without the truth's reading).
-    fn expected(&self) -> Option<f64> {
-        self.own
-            .map(|own| 100.0 * (1.0 - (1.0 - own / 100.0) * (1.0 - DEGREE)))
-    }
 }
 
 /// A real vessel, its centreline and where its ends are.
@@ -1592,11 +1586,10 @@ fn print_vessel_table(results: &[CaseResult], tools: &[&str]) {
             let pct = |p: Option<f64>| p.map_or("n/a".into(), |p| format!("{p:.1}%"));
             notes.push(format!(
                 "our report on the damaged input: NASCET {}, diameter stenosis {} (on the truth \
-                 at the same pick {}: {} expected)",
+                 at the same pick {})",
                 pct(st.nascet),
                 pct(st.diameter),
-                pct(st.own),
-                pct(st.expected())
+                pct(st.own)
             ));
         }
         if let Some(s) = r.peers_script {
@@ -1721,24 +1714,19 @@ fn print_summary(results: &[CaseResult], tools: &[&str]) {
     if !by_fill.is_empty() {
         println!("  ours by fill: {}", by_fill.join(", "));
     }
-    // The stenosis readings against the lesion made (50% of the truth's local diameter) and
-    // against the one expected from the truth's own reading at the pick.
+    // The stenosis readings against the lesion made (half the truth's local diameter).
     let readings: Vec<&StenosisReading> =
         results.iter().filter_map(|r| r.stenosis.as_ref()).collect();
     if !readings.is_empty() {
-        let near = |got: Option<f64>, want: Option<f64>| matches!((got, want), (Some(g), Some(w)) if (g - w).abs() <= 5.0);
+        let within = readings
+            .iter()
+            .filter(|s| {
+                s.diameter
+                    .is_some_and(|d| (d - 100.0 * DEGREE).abs() <= 5.0)
+            })
+            .count();
         println!(
-            "  our diameter stenosis at the pick: within 50 ± 5% on {} of {}; within 5 points of \
-             the expected (the truth's own narrowing there counted) on {} of {}",
-            readings
-                .iter()
-                .filter(|s| near(s.diameter, Some(100.0 * DEGREE)))
-                .count(),
-            readings.len(),
-            readings
-                .iter()
-                .filter(|s| near(s.diameter, s.expected()))
-                .count(),
+            "  our diameter stenosis at the pick within 50 ± 5% on {within} of {}",
             readings.len()
         );
     }
