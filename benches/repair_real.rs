@@ -49,9 +49,9 @@
 //! Per output: the symmetric Hausdorff distance to the truth restricted to D (dense barycentric
 //! samples, BVH closest point; benches/common/surface.rs) in units of h, h = the voxel our
 //! default repair of that case used (its report; the project's default-voxel rule on the damaged
-//! mesh when ours failed); the volume error in D against the truth, %; watertight (closed,
-//! manifold, consistently wound: `mesh_info`); components; the faces within 2 radii of D's
-//! centre that do not face out (winding number probed in front of and behind each:
+//! mesh when ours failed or inpainted nothing); the volume error in D against the truth, %;
+//! watertight (closed, manifold, consistently wound: `mesh_info`); components; the faces within
+//! 2 radii of D's centre that do not face out (winding number probed in front of and behind each:
 //! `inpaint::checks::faces_not_facing_out`; a slit, or a triangle folded over, as the stitch's
 //! shortest seam left 1–4 per output before; also a crease or sliver thinner than the probe's
 //! offset, and an input's own folds that an output keeps); whether it has more handles than the
@@ -541,6 +541,9 @@ struct CaseResult {
     kind: Kind,
     h: f64,
     h_from_report: bool,
+    /// Our default repair wrote a report (with or without a voxel: none when it inpainted
+    /// nothing, as on a vessel severed by the chop, whose cut end is taken for an open end).
+    ours_reported: bool,
     /// The damaged input itself against the truth (not a tool).
     input: Outcome,
     /// Per tool of `tool_names`; None: not run.
@@ -1495,6 +1498,7 @@ fn run_case(
         kind: case.kind,
         h,
         h_from_report: voxel.is_some(),
+        ours_reported: report.is_some(),
         input: judge(&case.damaged, vessel, &case.region, h, f64::NAN),
         outcomes,
         peers_script,
@@ -1592,6 +1596,8 @@ fn print_vessel_table(results: &[CaseResult], tools: &[&str]) {
             sig(r.h),
             if r.h_from_report {
                 ""
+            } else if r.ours_reported {
+                " (the default-voxel rule: ours inpainted nothing)"
             } else {
                 " (the default-voxel rule: ours failed)"
             }
