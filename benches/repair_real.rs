@@ -540,10 +540,10 @@ struct CaseResult {
     label: String,
     kind: Kind,
     h: f64,
-    h_from_report: bool,
-    /// Our default repair wrote a report (with or without a voxel: none when it inpainted
-    /// nothing, as on a vessel severed by the chop, whose cut end is taken for an open end).
-    ours_reported: bool,
+    /// Why `h` is the default-voxel rule's, not our report's voxel: our default repair failed,
+    /// or it inpainted nothing (a vessel severed by the chop, whose cut end is taken for an open
+    /// end: a report without a voxel). None: the report's voxel.
+    h_rule: Option<&'static str>,
     /// The damaged input itself against the truth (not a tool).
     input: Outcome,
     /// Per tool of `tool_names`; None: not run.
@@ -1497,8 +1497,11 @@ fn run_case(
         label: case.label.clone(),
         kind: case.kind,
         h,
-        h_from_report: voxel.is_some(),
-        ours_reported: report.is_some(),
+        h_rule: match (voxel, &report) {
+            (Some(_), _) => None,
+            (None, Some(_)) => Some("ours inpainted nothing"),
+            (None, None) => Some("ours failed"),
+        },
         input: judge(&case.damaged, vessel, &case.region, h, f64::NAN),
         outcomes,
         peers_script,
@@ -1594,13 +1597,9 @@ fn print_vessel_table(results: &[CaseResult], tools: &[&str]) {
         let mut notes = vec![format!(
             "h = {}{}",
             sig(r.h),
-            if r.h_from_report {
-                ""
-            } else if r.ours_reported {
-                " (the default-voxel rule: ours inpainted nothing)"
-            } else {
-                " (the default-voxel rule: ours failed)"
-            }
+            r.h_rule.map_or(String::new(), |why| format!(
+                " (the default-voxel rule: {why})"
+            ))
         )];
         if let Some(st) = &r.stenosis {
             let pct = |p: Option<f64>| p.map_or("n/a".into(), |p| format!("{p:.1}%"));

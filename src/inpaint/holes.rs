@@ -51,19 +51,11 @@ impl Default for LoopOptions {
 
 /// An open vessel end whose vertices lie farther than this fraction of its radius from their
 /// best-fit plane is named in a notice of `repair --holes`: segmentations are clipped by planes
-/// (every open end of the five real vessels of `benches/repair_real`, 1,100 loops over seeds
-/// 21–33: within 10⁻⁴ of their radius), a vessel cut through by damage is not (the carotid
-/// severed at its junction by the chops of seeds 31 and 33, its branches gone: 0.19 and 0.20,
-/// taken for an end and capped without a word before).
+/// (the 423 other open ends that `--holes` met on the 195 chops of `benches/repair_real`'s
+/// seeds 21–33: within 1.1 × 10⁻⁴ of their radius), a vessel cut through by damage is not (the
+/// carotid severed at its junction by the chops of seeds 31 and 33, its branches gone: 0.19 and
+/// 0.20, taken for an end and capped without a word before).
 pub const ROUGH_END_PLANARITY: f64 = 0.05;
-
-impl LoopInfo {
-    /// Taken for an open vessel end, but not planar as a clipped end is
-    /// ([`ROUGH_END_PLANARITY`]): perhaps a cut made by the damage.
-    pub fn is_rough_end(&self) -> bool {
-        self.kind == LoopKind::End && self.planarity > ROUGH_END_PLANARITY
-    }
-}
 
 /// One boundary loop and its classification.
 #[derive(Debug, Clone, PartialEq)]
@@ -86,6 +78,14 @@ pub struct LoopInfo {
     pub planarity: f64,
     /// Area-weighted mean |face normal · `normal`| over the faces touching the loop (0..1).
     pub wall_alignment: f64,
+}
+
+impl LoopInfo {
+    /// Taken for an open vessel end, but not planar as a clipped end is
+    /// ([`ROUGH_END_PLANARITY`]): perhaps a cut made by the damage.
+    pub fn is_rough_end(&self) -> bool {
+        self.kind == LoopKind::End && self.planarity > ROUGH_END_PLANARITY
+    }
 }
 
 /// Finds and classifies every boundary loop of `mesh` (see the module docs), in the order of
