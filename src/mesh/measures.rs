@@ -293,7 +293,13 @@ pub fn handles(mesh: &TriMesh) -> Option<i64> {
         return None;
     }
     let (n, _) = connected_components(mesh);
-    let twice = 2 * n as i64 - euler_characteristic_of(&map) - map.boundary_loops().len() as i64;
+    genus_capped(&map, n, map.boundary_loops().len())
+}
+
+/// g = (2·components − χ − loops)/2: the genus of the surface of `map` with its `loops` boundary
+/// loops capped by disks; `None` when that is not a whole number ≥ 0.
+fn genus_capped(map: &EdgeMap, components: usize, loops: usize) -> Option<i64> {
+    let twice = 2 * components as i64 - euler_characteristic_of(map) - loops as i64;
     (twice >= 0 && twice % 2 == 0).then_some(twice / 2)
 }
 
@@ -313,8 +319,7 @@ pub(crate) fn genus_of(
     if !edges.consistent && !super::orient::is_orientable_of(map) {
         return None;
     }
-    let twice = 2 * components as i64 - euler_characteristic_of(map);
-    (twice >= 0 && twice % 2 == 0).then_some(twice / 2)
+    genus_capped(map, components, 0)
 }
 
 /// Aspect ratio of the triangle (a, b, c), normalised so an equilateral triangle gives 1:
