@@ -55,6 +55,26 @@
 //!   throat's radius reaches the truth's in round 10 and goes on, 0.2 a round, and the rest of
 //!   D grows too, 0.04 a round: no fixed point at the healthy tube); at c·T = 4R, 42%. No
 //!   setting is kept as a default for it.
+//! - **What a round keeps** (measured on 2026-12-07, printing each level's surface in D; the
+//!   stenosis phantom and its truth, and the same tube lengthened from 10R to 18R so that its
+//!   flat ends lie beyond the crop; R = 3, h ≈ R/8). Nothing in the loop pulls the surface in D
+//!   back towards a healthy shape, so whatever a round moves stays moved:
+//!   - *The viscosity.* A heat flow of a signed distance moves its zero level set inward by
+//!     time × mean curvature: on the intact long tube the four levels' details (uniform there,
+//!     0.70 a level) add up to φ_T's depth at the truth's radius within 0.03, but each
+//!     viscosity step after a level takes 0.08 more, and the surface in D ends round 1 at 2.65
+//!     and round 2 at 2.59 instead of 3.0 (ε falls by 4 a round). The repair's union with the
+//!     input hides this on intact wall; over a hole it is part of what the fill misses.
+//!   - *The intact details next to D.* On the 10R phantom the tube's flat ends lie 1.4R beyond
+//!     D, inside the crop; the MST rounds them off, and the intact samples nearest D, whose
+//!     details fill D, carry that: 0.36–0.69 a level where the tube's own are 0.89. The loop
+//!     then grows even the intact truth's D (by 449 volume units where the tube holds about 610,
+//!     at the defaults), and at c·T = 2R the damaged phantom runs away as T grows: 203%
+//!     of the missing volume at T = R², 540% at 2R², 855% at 4R² (12 rounds, never converged).
+//!   - *The narrowing.* On the long tube with ε → 0 (10⁻⁶), the damaged shape is a fixed
+//!     point: 0% of the missing volume restored at c·T = R, 2% at c·T = 2R (converged in 8 and
+//!     3 rounds): the coarse level keeps the throat, and the intact details, uniform, give back
+//!     what the MST added.
 //! - **The ε schedule.** ε is the heat-flow time of the whole IMST (world length², split
 //!   evenly over the levels; default R²/8), divided by 4 every round, so the viscosity
 //!   vanishes as the loop converges (the paper's ε ↘ without a rate).
