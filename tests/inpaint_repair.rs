@@ -863,6 +863,38 @@ fn a_branch_from_a_junction_in_d_to_an_open_end_beside_it_is_kept() {
     assert!(hd <= 4.5 && ve.abs() <= 0.09, "{hd}h {ve}");
 }
 
+/// The carotid bulb's wall chop in `benches/repair_real`'s draw of seed 34 (held out): the hole
+/// lies on the bulb, whose wall swells out of the sections the anchors read beyond D. Between
+/// the two anchors the wall chart's offsets over the hole are held by the readings on either
+/// side; bounded at 0.8 section radii as past a tube's last reading (towards a junction
+/// point), the fill stopped 1 mm (0.4 radii) inside the bulb's wall: 4.08h / −16.2% in D.
+#[test]
+fn a_hole_in_the_carotid_bulb_is_filled_out_to_the_bulb() {
+    let Some(dir) = common::real_dir() else {
+        return;
+    };
+    let truth = common::read_real(&dir, "carotid_bifurcation.stl");
+    let (judged, _) = vesselmsr::mesh::cap::cap_holes(&truth, &Default::default()).unwrap();
+    let d = Ball {
+        center: Point3::new(
+            0.04677393888806364,
+            0.07397431432584933,
+            0.030519097819464932,
+        ),
+        radius: 0.004698247262299089,
+    };
+    let (done, hd, ve) = repair_bench_chop(&truth, &judged, d);
+    let p = &done.report.parameters;
+    assert_eq!(done.report.regions[0].fill, Some("through"));
+    assert!(p.stitched, "{:?}", p.fallback);
+    println!(
+        "seed 34's carotid bulb chop: {hd:.2}h, {:+.1}% in D",
+        100.0 * ve
+    );
+    // 3.10h / −4.8% measured (MeshLib 4.52h / −15.4%).
+    assert!(hd <= 3.5 && ve.abs() <= 0.07, "{hd}h {ve}");
+}
+
 /// End bites of the aneurysm in `benches/repair_real --end-bites` (../shared/data/real; the chop:
 /// every triangle with a corner in a ball of 1.5 local radii, the largest piece kept) that take
 /// its short ICA branch whole, from its open end to past the junction or to the parent beside
