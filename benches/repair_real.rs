@@ -265,6 +265,12 @@
 //! centre ratio as NaN (no vertex within a quarter radius of the centre on its coarse wall: the
 //! nearest one's ratio is printed now).
 //!
+//! Seed 34 (2026-12-07, new): median 1.86h / 1.8%, 10 of 25 within 1.5h and 5%, 18 within 3h,
+//! MeshLib beaten on 22, pymeshfix 25, pymeshlab 24; our whole command on a chop median 0.59 s
+//! (0.46–0.83 s), 48× MeshLib's filler call, 0.77× its whole run. Its capped aorta's junction
+//! chop severed an iliac (99.1h; MeshLib 121.7h); its carotid bulb's wall chop 4.08h / −16.2%
+//! led to the wall chart's bound applying only towards a junction point (3.10h / −4.8%).
+//!
 //! Seed 21 per case (the run before):
 //!
 //! | vessel | case | ours h / vol | ours s | MeshLib | pymeshfix | pymeshlab |

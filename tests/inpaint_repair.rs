@@ -835,6 +835,23 @@ fn repair_bench_chop(truth: &TriMesh, judged: &TriMesh, d: Ball) -> (RepairedVes
     (done, hd, ve)
 }
 
+/// A chop of `benches/repair_real` on the real vessel `file` (../shared/data/real; skipped when
+/// absent) given as its region D: repaired as [`repair_bench_chop`] does, filled as `fill`,
+/// stitched, and within `max_h` voxels and `max_ve` of the truth's volume in D.
+fn check_bench_chop(file: &str, d: Ball, fill: &str, max_h: f64, max_ve: f64, what: &str) {
+    let Some(dir) = common::real_dir() else {
+        return;
+    };
+    let truth = common::read_real(&dir, file);
+    let (judged, _) = vesselmsr::mesh::cap::cap_holes(&truth, &Default::default()).unwrap();
+    let (done, hd, ve) = repair_bench_chop(&truth, &judged, d);
+    let p = &done.report.parameters;
+    assert_eq!(done.report.regions[0].fill, Some(fill));
+    assert!(p.stitched, "{:?}", p.fallback);
+    println!("{what}: {hd:.2}h, {:+.1}% in D", 100.0 * ve);
+    assert!(hd <= max_h && ve.abs() <= max_ve, "{what}: {hd}h {ve}");
+}
+
 /// The aneurysm's junction chop in `benches/repair_real`'s draw of seed 28 (held out): its small
 /// branch leaves the junction inside D for its open end just beyond D. The inscribed sphere
 /// there is the end's (0.44 where the vessel's radius is 0.9): the branch was dropped as a spur
@@ -842,25 +859,13 @@ fn repair_bench_chop(truth: &TriMesh, judged: &TriMesh, d: Ball) -> (RepairedVes
 /// section's radius, and the three branches are joined at the junction.
 #[test]
 fn a_branch_from_a_junction_in_d_to_an_open_end_beside_it_is_kept() {
-    let Some(dir) = common::real_dir() else {
-        return;
-    };
-    let truth = common::read_real(&dir, "ica_aneurysm_c0015.stl");
-    let (judged, _) = vesselmsr::mesh::cap::cap_holes(&truth, &Default::default()).unwrap();
     let d = Ball {
         center: Point3::new(35.02669712897357, 33.07199631189985, 42.14149070000435),
         radius: 2.1173428676708927,
     };
-    let (done, hd, ve) = repair_bench_chop(&truth, &judged, d);
-    let p = &done.report.parameters;
-    assert_eq!(done.report.regions[0].fill, Some("junction"));
-    assert!(p.stitched, "{:?}", p.fallback);
-    println!(
-        "seed 28's ICA junction chop: {hd:.2}h, {:+.1}% in D",
-        100.0 * ve
-    );
     // 4.03h / +7.1% measured (MeshLib 4.62h / +5.5%).
-    assert!(hd <= 4.5 && ve.abs() <= 0.09, "{hd}h {ve}");
+    let what = "seed 28's ICA junction chop";
+    check_bench_chop("ica_aneurysm_c0015.stl", d, "junction", 4.5, 0.09, what);
 }
 
 /// The carotid bulb's wall chop in `benches/repair_real`'s draw of seed 34 (held out): the hole
@@ -870,11 +875,6 @@ fn a_branch_from_a_junction_in_d_to_an_open_end_beside_it_is_kept() {
 /// point), the fill stopped 1 mm (0.4 radii) inside the bulb's wall: 4.08h / −16.2% in D.
 #[test]
 fn a_hole_in_the_carotid_bulb_is_filled_out_to_the_bulb() {
-    let Some(dir) = common::real_dir() else {
-        return;
-    };
-    let truth = common::read_real(&dir, "carotid_bifurcation.stl");
-    let (judged, _) = vesselmsr::mesh::cap::cap_holes(&truth, &Default::default()).unwrap();
     let d = Ball {
         center: Point3::new(
             0.04677393888806364,
@@ -883,16 +883,9 @@ fn a_hole_in_the_carotid_bulb_is_filled_out_to_the_bulb() {
         ),
         radius: 0.004698247262299089,
     };
-    let (done, hd, ve) = repair_bench_chop(&truth, &judged, d);
-    let p = &done.report.parameters;
-    assert_eq!(done.report.regions[0].fill, Some("through"));
-    assert!(p.stitched, "{:?}", p.fallback);
-    println!(
-        "seed 34's carotid bulb chop: {hd:.2}h, {:+.1}% in D",
-        100.0 * ve
-    );
     // 3.10h / −4.8% measured (MeshLib 4.52h / −15.4%).
-    assert!(hd <= 3.5 && ve.abs() <= 0.07, "{hd}h {ve}");
+    let what = "seed 34's carotid bulb chop";
+    check_bench_chop("carotid_bifurcation.stl", d, "through", 3.5, 0.07, what);
 }
 
 /// End bites of the aneurysm in `benches/repair_real --end-bites` (../shared/data/real; the chop:

@@ -234,7 +234,7 @@ pub fn discount_cap_outside(
 /// to a junction point that the fill places, so the shape of the carina and the flare inside D
 /// is an estimate. Such fills are the least accurate of the repair: on the real damage of
 /// `benches/repair_real` (seeds 21–33), 33 of the 52 regions filled as a junction end beyond 3
-/// voxels of the truth, against 16 of the 271 others (seeds 21–23: 7 of 14, 4 of 61). `k`
+/// voxels of the truth, against 16 of the 271 others (seeds 21–23: 7 of 14, 2 of 61). `k`
 /// counts regions from 1.
 pub fn modelled_junction(k: usize, region: &RegionReport) -> Option<String> {
     if region.fill != Some(JUNCTION_FILL) {
