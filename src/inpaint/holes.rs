@@ -195,6 +195,13 @@ fn describe_loop(
 /// is an error saying so.
 pub fn hole_regions(mesh: &TriMesh, options: &LoopOptions) -> Result<(Vec<Ball>, Vec<LoopInfo>)> {
     let loops = classify_loops(mesh, options);
+    let balls = hole_balls(&loops, options)?;
+    Ok((balls, loops))
+}
+
+/// The balls of [`hole_regions`] for loops [`classify_loops`] already gave: an error when there
+/// are no loops or no hole among them.
+pub fn hole_balls(loops: &[LoopInfo], options: &LoopOptions) -> Result<Vec<Ball>> {
     if loops.is_empty() {
         return Err(Error::Geometry("mesh has no boundary loops".into()));
     }
@@ -212,5 +219,5 @@ pub fn hole_regions(mesh: &TriMesh, options: &LoopOptions) -> Result<(Vec<Ball>,
             loops.len()
         )));
     }
-    Ok((balls, loops))
+    Ok(balls)
 }

@@ -17,7 +17,7 @@
 //!    the parameters and timings. An output that is not watertight (ends not kept open) is an
 //!    error.
 
-use super::holes::{classify_loops, hole_regions, LoopKind, LoopOptions};
+use super::holes::{classify_loops, hole_balls, LoopKind, LoopOptions};
 use super::region::{read_regions, Ball, PickedSite};
 use super::region_limits::check_regions;
 pub use super::region_limits::MAX_REGIONS;
@@ -318,7 +318,7 @@ fn repair_traced(
             ));
         }
         if infos.iter().any(|l| l.kind == LoopKind::Hole) {
-            let (holes, _) = hole_regions(mesh, &LoopOptions::default())
+            let holes = hole_balls(&infos, &LoopOptions::default())
                 .map_err(|e| e.context(format!("{name}: --holes")))?;
             for b in holes {
                 balls.push(b);
