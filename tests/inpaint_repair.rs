@@ -888,6 +888,22 @@ fn a_hole_in_the_carotid_bulb_is_filled_out_to_the_bulb() {
     check_bench_chop("carotid_bifurcation.stl", d, "through", 3.5, 0.07, what);
 }
 
+/// The capped aorta's wall chop beside its closed upper end in `benches/repair_real`'s draw of
+/// seed 34 (held out): no section is clear of D before the vessel ends, so the tube is a dead
+/// end. It followed the damaged centreline, which bends 3.3 mm towards the wall the hole left,
+/// and was capped round: 5.45h / −5.8% in D. It now runs to the vessel's intact section at the
+/// centreline's tip, beyond D, and is cut flat there.
+#[test]
+fn a_chop_beside_a_closed_end_follows_the_vessel_to_its_end() {
+    let d = Ball {
+        center: Point3::new(216.48262805252878, 159.93062145492962, 28.266378768070645),
+        radius: 15.082549126487605,
+    };
+    // 2.17h / −1.5% measured (MeshLib 9.02h / −12.6%).
+    let what = "seed 34's capped aorta chop beside its end";
+    check_bench_chop("aorta_abdominal_capped.stl", d, "dead-end", 2.6, 0.03, what);
+}
+
 /// End bites of the aneurysm in `benches/repair_real --end-bites` (../shared/data/real; the chop:
 /// every triangle with a corner in a ball of 1.5 local radii, the largest piece kept) that take
 /// its short ICA branch whole, from its open end to past the junction or to the parent beside

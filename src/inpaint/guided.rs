@@ -45,9 +45,13 @@
 //!    into the vessel's cut end (an open end or a flat cap the damage reached, so that the
 //!    hole's rim runs partly along the cut), to that cut's plane, found as the plane holding 8
 //!    or more of the rim's points to 10⁻³ of the radius (`bitten_end`: segmentations are
-//!    clipped by planes), at the centre of the circle through them; or,
-//!    where the branch ends closed, continued along its own damaged centreline and capped
-//!    round.
+//!    clipped by planes), at the centre of the circle through them; else, where the branch
+//!    ends closed beyond D, to its section at the damaged centreline's tip (`closed_end_section`:
+//!    a circle fitted to the intact wall, outside E, in the plane across the chord from the
+//!    anchor; the damaged centreline bends towards the wall the hole left: 3.3 mm off the
+//!    vessel's axis in a chop beside the capped aorta's closed end) and cut flat there; or,
+//!    where that section is not intact (the damage reaches the end), continued along its own
+//!    damaged centreline and capped round.
 //! 3. **Sections.** Along a curve, a rotation-minimising frame (double reflection, Wang, Jüttler,
 //!    Zheng and Liu 2008) is carried from the first anchor; the section at arc-length fraction w
 //!    is (1 − w)·ρ_A(θ) + w·ρ_B(θ), both profiles read in the carried frame, so a tapering or
@@ -702,8 +706,9 @@ fn plan_group(
         1 => {
             // A dead end. Where the branch ends at an open vessel end (a cut across the vessel,
             // whose centre the end's loop gives, outside the damage), bridged from the anchor to
-            // that end like a vessel through D and cut flat there; otherwise (a closed end, a
-            // stump) continued along its own damaged centreline and capped round.
+            // that end like a vessel through D and cut flat there; otherwise (a closed end whose
+            // section beyond D is damaged, a stump) continued along its own damaged centreline
+            // and capped round.
             let st = &stubs[single[0]];
             let mut pts = vec![st.anchor.point];
             pts.extend(st.run.iter().copied());
@@ -738,9 +743,11 @@ fn plan_group(
             // between them (a chop of two radii beside the aneurysm's open ICA end, its loop
             // intact inside D); the vessel goes on to the nearest such end. Else, where the hole
             // has bitten into the vessel's cut end, that cut's plane (the end's rim left on it).
+            // Else, where the vessel ends closed beyond D, its intact section at the tip.
             let open_end = open_end
                 .or_else(|| open_end_in(centerline, &in_e, &st.anchor))
-                .or_else(|| bitten_end(rim, &st.anchor));
+                .or_else(|| bitten_end(rim, &st.anchor))
+                .or_else(|| closed_end_section(&sections, &in_e, &pts, st.anchor.radius));
             match open_end {
                 Some(end) => tubes.push(make_tube(
                     &sections,
@@ -955,6 +962,54 @@ fn open_end_in(
         } else {
             from.radius
         },
+        clear: false,
+        branch: None,
+        index: 0,
+    })
+}
+
+/// The section of a vessel at the tip of a dead end's run `pts` (from its anchor to the damaged
+/// centreline's tip, where the vessel ends closed beyond D), as the far anchor of a curve from
+/// that anchor: the centroid of the wall met by rays in the plane across the run's last stretch
+/// (cast again from that centroid), pointing back into the vessel, with the wall's mean
+/// distance as radius; its section is not read (`clear` false). None when a ray misses within
+/// two radii, meets a hole's cap or meets the wall inside E (`in_e`): the section is not intact.
+fn closed_end_section(
+    sections: &Sections,
+    in_e: &dyn Fn(&Point3<f64>) -> bool,
+    pts: &[Point3<f64>],
+    radius: f64,
+) -> Option<Anchor> {
+    let tip = *pts.last()?;
+    let into = (pts.first()? - tip).try_normalize(1e-12)?;
+    let e1 = any_perpendicular(&into);
+    let e2 = into.cross(&e1);
+    let rays = sections.rays.max(8);
+    let mut c = tip;
+    let mut mean_r = 0.0;
+    for _ in 0..2 {
+        // In-plane coordinates of the intact wall met by the rays.
+        let rim: Vec<(f64, f64)> = (0..rays)
+            .filter_map(|j| {
+                let th = TAU * j as f64 / rays as f64;
+                let d = e1 * th.cos() + e2 * th.sin();
+                let hit = sections.bvh.cast_ray(&c, &d, 2.0 * radius)?;
+                let wall = c + d * hit.t;
+                (!sections.is_cap(hit.face) && !in_e(&wall))
+                    .then(|| ((wall - tip).dot(&e1), (wall - tip).dot(&e2)))
+            })
+            .collect();
+        if rim.len() * 2 < rays {
+            return None;
+        }
+        let (x, y) = fit_circle(&rim)?;
+        c = tip + e1 * x + e2 * y;
+        mean_r = rim.iter().map(|&(u, v)| (u - x).hypot(v - y)).sum::<f64>() / rim.len() as f64;
+    }
+    Some(Anchor {
+        point: c,
+        into,
+        radius: mean_r,
         clear: false,
         branch: None,
         index: 0,
