@@ -368,7 +368,10 @@
 //! The end-bite study, seeds 21–23 (33 bites on the four open-ended vessels; 2026-12-05, late):
 //! ours 2.57h / 1.7% at the median, 17 within 3h, better than MeshLib (13.35h / 29.8%, the
 //! whole loop capped) on 31; before a dead end went on to the end the damage reached (the
-//! fill closed round along the damaged centreline), 8.61h / 27.3%, none within 3h.
+//! fill closed round along the damaged centreline), 8.61h / 27.3%, none within 3h. With the
+//! wall chart's second difference around the vessel weighted 0.7 (2026-12-07): 2.56h / 1.6%,
+//! 15 within 1.5h and 5%, 17 within 3h, MeshLib beaten on 33 (isotropic, the same build:
+//! 2.59h / 1.6%, 15 and 17).
 
 mod common;
 

@@ -65,7 +65,9 @@
 //!    which beside a rim that is not planar hides intact wall), within a junction's flare
 //!    too (on the branches of the tube's anchors: a gap's two ends may lie on two): that wall
 //!    is intact. The offsets over the hole are then the biharmonic interpolation of the
-//!    readings on the tube's wall chart (arc length × arc of the section; `wall_chart`), so the
+//!    readings on the tube's wall chart (arc length × arc of the section, the second
+//!    difference around weighing [`super::wall_chart::AROUND_WEIGHT`] of the one along;
+//!    `wall_chart`), so the
 //!    missing part of a section takes its shape, slope and bulge from the wall beside it,
 //!    around the vessel as well as along it; on a tube with no second anchor a filled offset
 //!    pushes the wall out by at most [`MAX_FILLED_BULGE`] of the section's radius (past the
