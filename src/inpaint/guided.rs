@@ -972,10 +972,12 @@ fn open_end_in(
 
 /// The section of a vessel at the tip of a dead end's run `pts` (from its anchor to the damaged
 /// centreline's tip, where the vessel ends closed beyond D), as the far anchor of a curve from
-/// that anchor: the centroid of the wall met by rays in the plane across the run's last stretch
-/// (cast again from that centroid), pointing back into the vessel, with the wall's mean
-/// distance as radius; its section is not read (`clear` false). None when a ray misses within
-/// two radii, meets a hole's cap or meets the wall inside E (`in_e`): the section is not intact.
+/// that anchor: the centre of the circle fitted to the wall that rays from the tip meet in the
+/// plane across the chord from the anchor (cast again from that centre), pointing back along
+/// the chord, with the wall's mean distance from the centre as radius; its section is not read
+/// (`clear` false). Only intact wall counts: a ray that misses within two radii, meets a hole's
+/// cap or meets the wall inside E (`in_e`) is dropped, and with fewer than half of the rays
+/// left the section is not the vessel's (the damage reaches it): None.
 fn closed_end_section(
     sections: &Sections,
     in_e: &dyn Fn(&Point3<f64>) -> bool,

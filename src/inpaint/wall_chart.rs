@@ -9,11 +9,11 @@
 //! The fill minimises the sum over all cells of the squared discrete Laplacian (a thin plate on
 //! the chart; the known cells fixed; its second difference around the section weighs
 //! [`AROUND_WEIGHT`] of the one along the vessel): its unknowns solve the biharmonic equation,
-//! so the wall's slope and curvature around the hole carry on into it. A harmonic (membrane) fill never leaves
-//! the range of its boundary values and flattens a bulge whose crest lies over the hole: on the
-//! real vessels of `benches/repair_real` the biharmonic fill took the largest error inside a
-//! hole from 2.09h to 1.23h (open aorta), 3.88h to 3.09h (aneurysm's ICA), 1.59h to 0.58h
-//! (the coronary's bend). The paper inpaints its multiscale details across D with a diffusion
+//! so the wall's slope and curvature around the hole carry on into it. A harmonic (membrane)
+//! fill never leaves the range of its boundary values and flattens a bulge whose crest lies
+//! over the hole: on the real vessels of `benches/repair_real` the biharmonic fill took the
+//! largest error inside a hole from 2.09h to 1.23h (open aorta), 3.88h to 3.09h (aneurysm's
+//! ICA), 1.59h to 0.58h (the coronary's bend). The paper inpaints its multiscale details across D with a diffusion
 //! (eq. 4.1, viscosity ε); this is the smoothest fill of that kind on the vessel's own chart.
 //!
 //! A junction's branch uses a tension τ (`fill_with_tension`, `guided::JUNCTION_CHART_TENSION`):
