@@ -164,8 +164,8 @@ fn a_hole_in_the_open_aorta_is_filled_without_a_slit() {
     assert!((patch - 2.0 * voxel).abs() < 1e-12 * voxel, "{p}");
     // Stitched at ∂D itself.
     assert_eq!(p["stitch_beyond"].as_f64(), Some(0.0), "{p}");
-    // Issue 21 asks for 1.5h (0.96h measured; 1.20h with the wall chart's Laplacian isotropic, 1.18h with the patch at the
-    // voxel too); the damaged input is 21.6h / −12.5%.
+    // Issue 21 asks for 1.5h (0.96h measured; 1.20h with the wall chart's Laplacian isotropic,
+    // 1.18h with the patch at the voxel too); the damaged input is 21.6h / −12.5%.
     assert!(hd <= 1.5, "{hd}h");
     assert!(ve.abs() <= 0.03, "{ve}");
 }
@@ -191,7 +191,8 @@ fn a_hole_beside_the_aortic_bifurcation_stays_within_3h() {
         "{}",
         report["notices"]
     );
-    // Issue 21 asks every case within 3h (2.51h measured; 2.15h with the wall chart's Laplacian isotropic; 3.20h before).
+    // Issue 21 asks every case within 3h (2.51h measured; 2.15h with the wall chart's Laplacian
+    // isotropic; 3.20h before).
     assert!(hd <= 3.0, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
 }
@@ -209,8 +210,8 @@ fn a_region_that_grazes_the_other_iliac_is_still_stitched() {
         8.588039476176371,
         "through",
     );
-    // 1.45h and +2.2% measured (1.55h and +2.3% with the wall chart's Laplacian isotropic; 1.57h and +2.5% with the
-    // patch at the voxel too, as the whole-vessel re-mesh gave).
+    // 1.45h and +2.2% measured (1.55h and +2.3% with the wall chart's Laplacian isotropic; 1.57h
+    // and +2.5% with the patch at the voxel too, as the whole-vessel re-mesh gave).
     assert!(hd <= 2.0, "{hd}h");
     assert!(ve.abs() <= 0.04, "{ve}");
 }
@@ -242,8 +243,8 @@ fn a_crotch_on_the_edge_of_d_is_stitched_beyond_it() {
         "{}",
         report["notices"]
     );
-    // 3.94h and +1.1% measured (4.36h and +1.7% with the wall chart's Laplacian isotropic; 4.38h re-meshed whole): a
-    // modelled junction.
+    // 3.94h and +1.1% measured (4.36h and +1.7% with the wall chart's Laplacian isotropic; 4.38h
+    // re-meshed whole): a modelled junction.
     assert!(hd <= 4.75, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
 }
@@ -262,8 +263,9 @@ fn a_junction_hole_of_the_capped_aorta_is_stitched() {
         11.154411028337723,
         "junction",
     );
-    // 4.39h and −6.6% measured (4.26h and −6.5% with the wall chart's Laplacian isotropic,
-    // 4.23h with the patch at the voxel too, as the whole-vessel re-mesh gave): the junction's shape is modelled, not measured (issue 21's 3h not met here).
+    // 4.39h and −6.6% measured (4.26h and −6.5% with the wall chart's Laplacian isotropic, 4.23h
+    // with the patch at the voxel too, as the whole-vessel re-mesh gave): the junction's shape is
+    // modelled, not measured (issue 21's 3h not met here).
     assert!(hd <= 4.75, "{hd}h");
     assert!(ve.abs() <= 0.08, "{ve}");
 }
@@ -287,8 +289,9 @@ fn a_hole_over_the_carina_does_not_keep_its_caps_web() {
         notices.contains("the hole's cap crossed space outside the vessel"),
         "{notices}"
     );
-    // 9.66h and +9.8% measured (9.63h and +10.2% with the wall chart's Laplacian isotropic): the iliacs' tubes still part below the truth's carina (its
-    // junction's shape is modelled, not measured: issue 21's 3h not met here).
+    // 9.66h and +9.8% measured (9.63h and +10.2% with the wall chart's Laplacian isotropic): the
+    // iliacs' tubes still part below the truth's carina (its junction's shape is modelled, not
+    // measured: issue 21's 3h not met here).
     assert!(hd <= 10.5, "{hd}h");
     assert!(ve <= 0.12, "{ve}");
 }
@@ -312,8 +315,8 @@ fn a_junction_fill_leaves_no_tunnel_through_the_vessel() {
             && notices.contains("closed by a morphological closing"),
         "{notices}"
     );
-    // 15.71h measured (16.11h with the wall chart's Laplacian isotropic, 16.26h with the tunnel too): the junction's lumen is placed off the truth's
-    // (issue 21's 3h not met here).
+    // 15.71h measured (16.11h with the wall chart's Laplacian isotropic, 16.26h with the tunnel
+    // too): the junction's lumen is placed off the truth's (issue 21's 3h not met here).
     assert!(hd <= 17.0, "{hd}h");
 }
 
