@@ -989,31 +989,28 @@ fn closed_end_section(
     let e1 = any_perpendicular(&into);
     let e2 = into.cross(&e1);
     let rays = sections.rays.max(8);
-    let mut c = tip;
-    let mut mean_r = 0.0;
+    let mut circle = (tip, 0.0);
     for _ in 0..2 {
-        // In-plane coordinates of the intact wall met by the rays.
-        let rim: Vec<(f64, f64)> = (0..rays)
+        let c = circle.0;
+        // The intact wall the rays meet.
+        let rim: Vec<Point3<f64>> = (0..rays)
             .filter_map(|j| {
                 let th = TAU * j as f64 / rays as f64;
                 let d = e1 * th.cos() + e2 * th.sin();
                 let hit = sections.bvh.cast_ray(&c, &d, 2.0 * radius)?;
                 let wall = c + d * hit.t;
-                (!sections.is_cap(hit.face) && !in_e(&wall))
-                    .then(|| ((wall - tip).dot(&e1), (wall - tip).dot(&e2)))
+                (!sections.is_cap(hit.face) && !in_e(&wall)).then_some(wall)
             })
             .collect();
         if rim.len() * 2 < rays {
             return None;
         }
-        let (x, y) = fit_circle(&rim)?;
-        c = tip + e1 * x + e2 * y;
-        mean_r = rim.iter().map(|&(u, v)| (u - x).hypot(v - y)).sum::<f64>() / rim.len() as f64;
+        circle = circle_in_plane(&rim, &into, &tip)?;
     }
     Some(Anchor {
-        point: c,
+        point: circle.0,
         into,
-        radius: mean_r,
+        radius: circle.1,
         clear: false,
         branch: None,
         index: 0,

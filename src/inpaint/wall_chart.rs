@@ -29,8 +29,8 @@
 
 /// Weight of the chart Laplacian's second difference around the section, against the one along
 /// the vessel (1: isotropic in world units). A vessel's wall continues along the vessel more
-/// faithfully than around it (a flattened aorta's sides flare where its top and bottom close in;
-/// a ridge runs along the vessel): on the 375 kept cases of `benches/repair_real` (seeds 21–35)
+/// faithfully than around it (towards its bifurcation a flattened aorta's sides flare where its
+/// top and bottom close in: seed 26's junction chop, 4.36h isotropic): on the 375 kept cases of `benches/repair_real` (seeds 21–35)
 /// 0.7 moved 157 outputs by more than 0.05h, 102 closer to the truth and 55 farther (chosen
 /// against 0.5, 115 and 88, and 0.85, 80 and 26; on seeds 21–28 and 29–35 apart, 54 and 30,
 /// 48 and 25).
