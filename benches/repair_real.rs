@@ -270,10 +270,11 @@
 //! (0.46–0.83 s), 48× MeshLib's filler call, 0.77× its whole run. Its capped aorta's junction
 //! chop severed an iliac (99.1h; MeshLib 121.7h); its carotid bulb's wall chop 4.08h / −16.2%
 //! led to the wall chart's bound applying only towards a junction point (3.10h / −4.8%).
-//! Seed 35 (2026-12-07, new): median 1.09h / 1.9%, 14 within 1.5h and 5%, 21 within 3h,
-//! MeshLib beaten on 23, pymeshfix and pymeshlab 25. Then a dead end towards a closed vessel
-//! end bridged to its intact section there, and the wall chart's second difference around the
-//! vessel weighted 0.7; seeds 21–35 re-run: all 375 median 1.09h / 1.3%, 205 within 1.5h and
+//! Then a dead end towards a closed vessel end bridged to its intact section there (five chops
+//! of seeds 22–34 move, 2.08–5.45h → 0.83–2.17h). Seed 35 (2026-12-07, new, drawn with it):
+//! median 1.09h / 1.9%, 14 within 1.5h and 5%, 21 within 3h, MeshLib beaten on 23, pymeshfix
+//! and pymeshlab 25. Then the wall chart's second difference around the vessel weighted 0.7;
+//! seeds 21–35 re-run: all 375 median 1.09h / 1.3%, 205 within 1.5h and
 //! 5%, 320 within 3h, MeshLib beaten on 350, pymeshfix and pymeshlab 369; per draw medians
 //! 0.93–1.48h but seed 34's 1.91h; our whole command on a chop median 0.40–0.54 s per draw.
 //!
