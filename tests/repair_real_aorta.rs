@@ -27,22 +27,18 @@ use vesselmsr::mesh::info::mesh_info;
 use vesselmsr::mesh::measures::handles;
 use vesselmsr::TriMesh;
 
-/// `vesselmsr repair DAMAGED FLAG -o … --report … -q` in `dir`: the repaired mesh and report.
-fn repair_by_cli(damaged: &TriMesh, flag: &str, dir: &Path) -> (TriMesh, Value) {
+/// `vesselmsr repair DAMAGED FLAGS -o … --report … -q` in `dir` (FLAGS whitespace-separated):
+/// the repaired mesh and report.
+fn repair_by_cli(damaged: &TriMesh, flags: &str, dir: &Path) -> (TriMesh, Value) {
     let input = dir.join("damaged.stl");
     write_mesh(&input, damaged).unwrap();
     let (output, report) = (dir.join("repaired.stl"), dir.join("report.json"));
     let p = |x: &Path| x.to_str().unwrap().to_string();
-    let run = vesselmsr(&[
-        "repair",
-        &p(&input),
-        flag,
-        "-o",
-        &p(&output),
-        "--report",
-        &p(&report),
-        "-q",
-    ]);
+    let (input_s, output_s, report_s) = (p(&input), p(&output), p(&report));
+    let mut args = vec!["repair", &input_s];
+    args.extend(flags.split_whitespace());
+    args.extend(["-o", &output_s, "--report", &report_s, "-q"]);
+    let run = vesselmsr(&args);
     assert!(
         run.status.success(),
         "{}",
@@ -61,9 +57,15 @@ fn repair_by_cli(damaged: &TriMesh, flag: &str, dir: &Path) -> (TriMesh, Value) 
     (read_mesh(&output).unwrap(), report)
 }
 
-/// Chops `file` (data/) at `centre` with a ball of `radius`, repairs it with `repair --holes`
-/// and checks the output; returns (Hausdorff in D in voxels, volume error in D, report).
-fn chop_and_repair(file: &str, centre: [f64; 3], radius: f64, dir: &Path) -> (f64, f64, Value) {
+/// Chops `file` (data/) at `centre` with a ball of `radius`, repairs it with `repair FLAGS`
+/// (whitespace-separated) and checks the output; returns (Hausdorff in D in voxels, volume error in D, report).
+fn chop_and_repair(
+    file: &str,
+    centre: [f64; 3],
+    radius: f64,
+    flags: &str,
+    dir: &Path,
+) -> (f64, f64, Value) {
     let truth = read_mesh(&data_dir().join(file)).unwrap();
     let chop = Ball {
         center: Point3::from(centre),
@@ -78,7 +80,7 @@ fn chop_and_repair(file: &str, centre: [f64; 3], radius: f64, dir: &Path) -> (f6
         damaged.num_faces() + 300 < truth.num_faces(),
         "the chop removed a wall"
     );
-    let (repaired, report) = repair_by_cli(&damaged, "--holes", dir);
+    let (repaired, report) = repair_by_cli(&damaged, flags, dir);
     let info = mesh_info(&repaired);
     assert!(info.watertight, "not watertight");
     assert!(
@@ -131,8 +133,19 @@ fn chop_and_repair(file: &str, centre: [f64; 3], radius: f64, dir: &Path) -> (f6
 /// over 1.3), in a folder of its own; checks the region was filled as `fill` and that the
 /// whole vessel was not re-meshed instead (no `fallback`).
 fn bench_chop(file: &str, centre: [f64; 3], d_radius: f64, fill: &str) -> (f64, f64, Value) {
+    bench_chop_with(file, centre, d_radius, fill, "--holes")
+}
+
+/// [`bench_chop`] repaired with `repair FLAGS` (whitespace-separated) instead of `--holes`.
+fn bench_chop_with(
+    file: &str,
+    centre: [f64; 3],
+    d_radius: f64,
+    fill: &str,
+    flags: &str,
+) -> (f64, f64, Value) {
     let dir = tempfile::tempdir().unwrap();
-    let (hd, ve, report) = chop_and_repair(file, centre, d_radius / 1.3, dir.path());
+    let (hd, ve, report) = chop_and_repair(file, centre, d_radius / 1.3, flags, dir.path());
     assert_eq!(report["regions"][0]["fill"], fill, "{report}");
     assert!(report["parameters"]["fallback"].is_null(), "{report}");
     (hd, ve, report)
@@ -145,6 +158,7 @@ fn a_hole_in_the_open_aorta_is_filled_without_a_slit() {
         "aorta_abdominal_open_ends.stl",
         [210.9, 116.7, 24.33],
         6.647,
+        "--holes",
         dir.path(),
     );
     // A wall on one vessel: continued through D, no junction notice.
@@ -191,8 +205,9 @@ fn a_hole_beside_the_aortic_bifurcation_stays_within_3h() {
         "{}",
         report["notices"]
     );
-    // Issue 21 asks every case within 3h (2.51h measured; 2.15h with the wall chart's Laplacian
-    // isotropic; 3.20h before).
+    // Issue 21 asks every case within 3h (2.27h measured; 2.51h with the junction branches'
+    // equal Hermite tangents, `guided::JUNCTION_TANGENTS`, 2.15h with the wall chart's Laplacian
+    // isotropic too; 3.20h before).
     assert!(hd <= 3.0, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
 }
@@ -243,8 +258,9 @@ fn a_crotch_on_the_edge_of_d_is_stitched_beyond_it() {
         "{}",
         report["notices"]
     );
-    // 3.94h and +1.1% measured (4.36h and +1.7% with the wall chart's Laplacian isotropic; 4.38h
-    // re-meshed whole): a modelled junction.
+    // 3.43h and +0.8% measured (3.94h and +1.1% with the junction branches' equal Hermite
+    // tangents, 4.36h and +1.7% with the wall chart's Laplacian isotropic too; 4.38h re-meshed
+    // whole): a modelled junction.
     assert!(hd <= 4.75, "{hd}h");
     assert!(ve.abs() <= 0.05, "{ve}");
 }
@@ -263,8 +279,9 @@ fn a_junction_hole_of_the_capped_aorta_is_stitched() {
         11.154411028337723,
         "junction",
     );
-    // 4.39h and −6.6% measured (4.26h and −6.5% with the wall chart's Laplacian isotropic, 4.23h
-    // with the patch at the voxel too, as the whole-vessel re-mesh gave): the junction's shape is
+    // 4.02h and −6.1% measured (4.39h and −6.6% with the junction branches' equal Hermite
+    // tangents, 4.26h and −6.5% with the wall chart's Laplacian isotropic too, 4.23h with the
+    // patch at the voxel too, as the whole-vessel re-mesh gave): the junction's shape is
     // modelled, not measured (issue 21's 3h not met here).
     assert!(hd <= 4.75, "{hd}h");
     assert!(ve.abs() <= 0.08, "{ve}");
@@ -289,25 +306,52 @@ fn a_hole_over_the_carina_does_not_keep_its_caps_web() {
         notices.contains("the hole's cap crossed space outside the vessel"),
         "{notices}"
     );
-    // 9.66h and +9.8% measured (9.63h and +10.2% with the wall chart's Laplacian isotropic): the
-    // iliacs' tubes still part below the truth's carina (its junction's shape is modelled, not
-    // measured: issue 21's 3h not met here).
+    // 8.90h and +9.6% measured (9.66h and +9.8% with the junction branches' equal Hermite
+    // tangents, 9.63h and +10.2% with the wall chart's Laplacian isotropic too): the iliacs'
+    // tubes still part below the truth's carina (its junction's shape is modelled, not measured:
+    // issue 21's 3h not met here).
     assert!(hd <= 10.5, "{hd}h");
     assert!(ve <= 0.12, "{ve}");
 }
 
 /// The benchmark's chop#1 of the capped aorta in the draw of seed 29 (held out): a hole over the
-/// whole front of the bifurcation. The junction's estimated lumen lies 3 mm to the side of the
-/// strip of wall the hole left on the other side, and the gap between the two ran through the
-/// vessel: a tunnel (the output's genus 1, the truth's 0). The fill is now closed in D by the
-/// smallest closing that removes it (`inpaint::tunnel`), with a notice.
+/// whole front of the bifurcation. The hole's cap dents the lumen and the damaged skeleton
+/// sprouts spurs, ten junctions in E; the one nearest the anchors, a spur's (inscribed radius
+/// 1.24 where the iliacs' are 4.1), stood 11.7 mm from the truth's, and the trunk was led across
+/// the right iliac's lumen to it: 15.79h, and the gap between that lumen and the strip of wall
+/// the hole left ran through the vessel, a tunnel (the output's genus 1, the truth's 0), closed
+/// by `inpaint::tunnel`. The junction is now the nearest one as wide as half the narrowest
+/// anchor (`guided::JUNCTION_MIN_RADIUS`; 4.35, 7.0 mm from the truth's), and the fill leaves
+/// no tunnel (`chop_and_repair` checks the genus).
 #[test]
-fn a_junction_fill_leaves_no_tunnel_through_the_vessel() {
-    let (hd, _, report) = bench_chop(
+fn a_junction_chop_joins_the_branches_at_the_bifurcation_not_at_a_spur() {
+    let (hd, ve, report) = bench_chop(
         "aorta_abdominal_capped.stl",
         [222.9602717458809, 131.77253662387804, 28.718339448262288],
         13.971884731559433,
         "junction",
+    );
+    let notices = report["notices"].to_string();
+    assert!(!notices.contains("tunnel"), "{notices}");
+    // 8.69h / −9.3% measured (MeshLib 10.51h): the trunk's top wall still sags 3 mm over the
+    // hole towards the junction, which lies 2.3 mm below the truth's (issue 21's 3h not met
+    // here).
+    assert!(hd <= 10.0, "{hd}h");
+    assert!(ve.abs() <= 0.11, "{ve}");
+}
+
+/// The same chop filled along the axis (`--method axial`), which joins the two sides of D
+/// across the bifurcation: the fill leaves a tunnel through the vessel (genus 1, the truth's 0),
+/// and the field is closed in D by the smallest closing that removes it (`inpaint::tunnel`),
+/// with a notice.
+#[test]
+fn a_tunnel_left_by_the_fill_is_closed() {
+    let (_, _, report) = bench_chop_with(
+        "aorta_abdominal_capped.stl",
+        [222.9602717458809, 131.77253662387804, 28.718339448262288],
+        13.971884731559433,
+        "axial",
+        "--holes --method axial",
     );
     let notices = report["notices"].to_string();
     assert!(
@@ -315,9 +359,6 @@ fn a_junction_fill_leaves_no_tunnel_through_the_vessel() {
             && notices.contains("closed by a morphological closing"),
         "{notices}"
     );
-    // 15.71h measured (16.11h with the wall chart's Laplacian isotropic, 16.26h with the tunnel
-    // too): the junction's lumen is placed off the truth's (issue 21's 3h not met here).
-    assert!(hd <= 17.0, "{hd}h");
 }
 
 /// The benchmark's chop#1 of the open aorta in the draw of seed 25: a hole in the aorta's top
@@ -336,8 +377,9 @@ fn a_junction_fill_does_not_bulge_over_the_aortas_top_wall() {
         13.495492507156944,
         "junction",
     );
-    // 3.53h and +1.9% measured (4.24h and +2.9% with the wall chart's Laplacian isotropic;
-    // 4.82h and +3.9% with a thin-plate chart, 6.26h and +4.8% unshaved too, 8.24h and +6.1%
+    // 3.11h and +1.4% measured (3.53h and +1.9% with the junction branches' equal Hermite
+    // tangents, 4.24h and +2.9% with the wall chart's Laplacian isotropic too; 4.82h and +3.9%
+    // with a thin-plate chart, 6.26h and +4.8% unshaved too, 8.24h and +6.1%
     // unbounded too). Still beyond issue 21's 3h: the junction's shape is modelled, not
     // measured.
     assert!(hd <= 4.75, "{hd}h");
@@ -356,6 +398,7 @@ fn the_inward_capped_aorta_is_repaired_outward() {
         "aorta_abdominal_capped.stl",
         [235.8, 115.4, 26.52],
         6.717,
+        "--holes",
         dir.path(),
     );
     let notices = report["notices"].to_string();
