@@ -25,11 +25,12 @@
 //!    Runs that end inside D (a gap: the vessel cut in two; a junction in D) give
 //!    one-sided anchors: two are bridged the same way; three or more (a bifurcation) are each
 //!    continued to the junction point (the centreline's junction inside E, not a thin spur of the
-//!    damage's skeleton: [`JUNCTION_MIN_RADIUS`], else the point nearest
-//!    to all anchor axes in least squares), along a Hermite curve that leaves the junction the
-//!    way the damaged centreline does (the graph walked from the anchor's branch to that
-//!    junction; unless the anchor's tangent already points at the junction: a straight vessel,
-//!    whose centreline a cap bends), end there in a round cap (a ball no wider than the
+//!    damage's skeleton: [`JUNCTION_MIN_RADIUS`]; else the point nearest to all anchor axes in
+//!    least squares), along a Hermite curve that keeps the anchor's direction twice as long as a
+//!    circular bend would and turns into the junction late ([`JUNCTION_TANGENTS`]), leaving the
+//!    junction the way the damaged centreline does (the graph walked from the anchor's branch to
+//!    that junction; unless the anchor's tangent already points at the junction: a straight
+//!    vessel, whose centreline a cap bends), end there in a round cap (a ball no wider than the
 //!    junction's inscribed sphere, unless that sphere rests on a hole's cap: the parent's own
 //!    radius stood 1.2 mm out of the wall beside the aortic bifurcation) and are joined by a
 //!    smooth minimum of a quarter radius (the fillet of a carina). Where two or more end in D,
