@@ -277,6 +277,12 @@
 //! seeds 21–35 re-run: all 375 median 1.09h / 1.3%, 205 within 1.5h and
 //! 5%, 320 within 3h, MeshLib beaten on 350, pymeshfix and pymeshlab 369; per draw medians
 //! 0.93–1.48h but seed 34's 1.91h; our whole command on a chop median 0.40–0.54 s per draw.
+//! Then a junction counts only where it is half as wide as the narrowest branch (seed 29's
+//! aorta junction chops had taken a spur's: 15.79h → 8.48h, 17.01h → 7.18h, and no tunnel), and
+//! junction branches keep their anchors' direction longer (`guided::JUNCTION_TANGENTS`; the 61
+//! junction fills' mean 4.14h → 3.78h); seeds 21–35 re-run: all 375 median 1.09h / 1.4%, 205
+//! within 1.5h and 5%, 323 within 3h, MeshLib beaten on 359, pymeshfix and pymeshlab 371;
+//! our whole command on a chop median 0.36–0.49 s per draw.
 //!
 //! Seed 21 per case (the run before):
 //!
