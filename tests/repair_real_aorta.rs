@@ -58,7 +58,8 @@ fn repair_by_cli(damaged: &TriMesh, flags: &str, dir: &Path) -> (TriMesh, Value)
 }
 
 /// Chops `file` (data/) at `centre` with a ball of `radius`, repairs it with `repair FLAGS`
-/// (whitespace-separated) and checks the output; returns (Hausdorff in D in voxels, volume error in D, report).
+/// (whitespace-separated) and checks the output; returns (Hausdorff in D in voxels, volume
+/// error in D, report).
 fn chop_and_repair(
     file: &str,
     centre: [f64; 3],
@@ -379,9 +380,8 @@ fn a_junction_fill_does_not_bulge_over_the_aortas_top_wall() {
     );
     // 3.11h and +1.4% measured (3.53h and +1.9% with the junction branches' equal Hermite
     // tangents, 4.24h and +2.9% with the wall chart's Laplacian isotropic too; 4.82h and +3.9%
-    // with a thin-plate chart, 6.26h and +4.8% unshaved too, 8.24h and +6.1%
-    // unbounded too). Still beyond issue 21's 3h: the junction's shape is modelled, not
-    // measured.
+    // with a thin-plate chart, 6.26h and +4.8% unshaved too, 8.24h and +6.1% unbounded too).
+    // Still beyond issue 21's 3h: the junction's shape is modelled, not measured.
     assert!(hd <= 4.75, "{hd}h");
     assert!(ve.abs() <= 0.035, "{ve}");
 }

@@ -237,12 +237,12 @@ pub const JUNCTION_CHART_TENSION: f64 = 1.0;
 /// the lumen, and its skeleton sprouts short spurs whose junctions are thin: in seed 29's
 /// capped-aorta chop over the bifurcation of `benches/repair_real` (held out), ten junctions
 /// lie in E with inscribed radii of 0.27–4.35 where the iliacs' are 4.1–4.2; the one nearest the
-/// anchors (radius 1.24) stood 11.7 mm from the truth's (7.0 mm for the widest, 4.35) and the
-/// trunk was led across the iliac's lumen to it: 15.79h. On the 61 junction fills of the 375
-/// kept cases of seeds 21–35 this moves three junctions (the seed-29 capped and open aortas,
-/// 15.79h → 8.48h and 17.01h → 7.18h; the seed-30 capped aorta, 8.07h → 3.01h) and no other
-/// output. (Judged by the junctions' distances to the truth's: 0.3 moves only the seed-29 open
-/// aorta's, to one farther from it; 0.8 picks the same three as 0.5.)
+/// anchors (radius 1.24) stood 11.7 mm from the truth's (the widest one, 4.35, stands 7.0 mm
+/// from it) and the trunk was led across the iliac's lumen to it: 15.79h. On the 61 junction
+/// fills of the 375 kept cases of seeds 21–35 this moves three junctions (the seed-29 capped and
+/// open aortas, 15.79h → 8.48h and 17.01h → 7.18h; the seed-30 capped aorta, 8.07h → 3.01h)
+/// and no other output. (Judged by the junctions' distances to the truth's: 0.3 moves only the
+/// seed-29 open aorta's, to one farther from it; 0.8 picks the same three as 0.5.)
 pub const JUNCTION_MIN_RADIUS: f64 = 0.5;
 
 /// Tangent lengths of a junction branch's Hermite curve, at its anchor and at the junction
@@ -251,12 +251,15 @@ pub const JUNCTION_MIN_RADIUS: f64 = 0.5;
 /// the curve with equal tangents cut the corner from the anchor. In seed 27's capped-aorta chop
 /// over the carina of `benches/repair_real` the left iliac's curve ran 3 mm inside the truth's
 /// centreline 6 mm below the junction (x 218.7 against 215.5): the two iliacs' tubes met there,
-/// and the carina stood 3 mm low (9.63h; 8.90h with the lengths kept). On the 61 junction fills of the 375 kept cases of
-/// seeds 21–35 (Hausdorff in D; mean, median): (1, 1) 4.14h, 3.56h; (1.5, 1) 4.03h, 3.12h;
-/// (2, 1) 4.06h, 3.60h; (1, 0.5) 4.80h, 3.96h; (1.5, 0.5) 4.13h, 3.54h; (2.5, 0.5) 3.77h,
-/// 3.33h; (3, 0.5) 3.87h, 3.37h; (2, 0.75) 3.88h, 3.21h; (2, 0.25) 3.82h, 3.22h; (2, 0.5),
-/// kept: 3.78h, 3.06h, 38 closer and 15 farther (seeds 21–28: 28 and 6, mean 3.90h → 3.41h;
-/// seeds 29–35: 10 and 9, 4.46h → 4.28h), within 3h 25 → 28.
+/// and the carina stood 3 mm low (9.63h; 8.90h with the lengths kept). On the 61 junction fills
+/// of the 375 kept cases of seeds 21–35 (Hausdorff in D; mean, median): (1, 1) 4.14h, 3.56h;
+/// (1.5, 1) 4.03h, 3.12h; (2, 1) 4.06h, 3.60h; (1, 0.5) 4.80h, 3.96h; (1.5, 0.5) 4.13h, 3.54h;
+/// (2.5, 0.5) 3.77h, 3.33h; (3, 0.5) 3.87h, 3.37h; (2, 0.75) 3.88h, 3.21h; (2, 0.25) 3.82h,
+/// 3.22h; (2, 0.5), kept: 3.78h, 3.06h, 38 closer and 15 farther (seeds 21–28: 28 and 6, mean
+/// 3.90h → 3.41h; seeds 29–35: 10 and 9, 4.46h → 4.28h), within 3h 25 → 28. Nothing else
+/// moves. With these lengths neither the branches' fillet (0.15, 0.35 of a radius against 0.25)
+/// nor the chart's tension (0.5, 2 against 1) does clearly better on those 61 (closer /
+/// farther: 7 / 14; 14 / 12, mean 3.78h → 3.77h; 23 / 16, median 3.06h → 3.20h; 14 / 28).
 pub const JUNCTION_TANGENTS: [f64; 2] = [2.0, 0.5];
 
 /// Holds each filled (not `known`) detail of a tube's chart (`m` rays per sample) to at most
