@@ -13,8 +13,9 @@
 //! fill never leaves the range of its boundary values and flattens a bulge whose crest lies
 //! over the hole: on the real vessels of `benches/repair_real` the biharmonic fill took the
 //! largest error inside a hole from 2.09h to 1.23h (open aorta), 3.88h to 3.09h (aneurysm's
-//! ICA), 1.59h to 0.58h (the coronary's bend). The paper inpaints its multiscale details across D with a diffusion
-//! (eq. 4.1, viscosity ε); this is the smoothest fill of that kind on the vessel's own chart.
+//! ICA), 1.59h to 0.58h (the coronary's bend). The paper inpaints its multiscale details
+//! across D with a diffusion (eq. 4.1, viscosity ε); this is the smoothest fill of that kind on
+//! the vessel's own chart.
 //!
 //! A junction's branch uses a tension τ (`fill_with_tension`, `guided::JUNCTION_CHART_TENSION`):
 //! Σ (L u)² + τ Σ |∇u|², a thin plate over short lengths and a membrane over long ones, so that
@@ -30,10 +31,10 @@
 /// Weight of the chart Laplacian's second difference around the section, against the one along
 /// the vessel (1: isotropic in world units). A vessel's wall continues along the vessel more
 /// faithfully than around it (towards its bifurcation a flattened aorta's sides flare where its
-/// top and bottom close in: seed 26's junction chop, 4.36h isotropic): on the 375 kept cases of `benches/repair_real` (seeds 21–35)
-/// 0.7 moved 157 outputs by more than 0.05h, 102 closer to the truth and 55 farther (chosen
-/// against 0.5, 115 and 88, and 0.85, 80 and 26; on seeds 21–28 and 29–35 apart, 54 and 30,
-/// 48 and 25).
+/// top and bottom close in: seed 26's junction chop, 4.36h isotropic): on the 375 kept cases of
+/// `benches/repair_real` (seeds 21–35) 0.7 moved 157 outputs by more than 0.05h, 102 closer to
+/// the truth and 55 farther (chosen against 0.5, 115 and 88, and 0.85, 80 and 26; on seeds
+/// 21–28 and 29–35 apart, 54 and 30, 48 and 25).
 pub const AROUND_WEIGHT: f64 = 0.7;
 
 /// The stencil of the chart's Laplacian at cell (i, j) (cells sample-major, `m` angles per
