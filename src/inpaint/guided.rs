@@ -38,9 +38,9 @@
 //!    it) joins them (as one more junction branch, or as a side branch) from that end, read off
 //!    the hole's rim: the plane holding 8 or more rim points to 10⁻³ of the radius, a run of
 //!    them along a circle of a vessel's size, with the rim on one side and no vessel beyond it
-//!    (`cut_end_in_rim`), at the centre of that circle, its tube cut flat there. A single one beside a
-//!    vessel that crosses D is a side branch, continued to that vessel's curve where its axis
-//!    meets it and joined the same way; a single one alone is bridged to the branch's open
+//!    (`cut_end_in_rim`), at the centre of that circle, its tube cut flat there. A single one
+//!    beside a vessel that crosses D is a side branch, continued to that vessel's curve where its
+//!    axis meets it and joined the same way; a single one alone is bridged to the branch's open
 //!    vessel end (the centre of a cut across the vessel, outside the damage) and cut flat there;
 //!    else to an open end inside E that the damaged centreline, broken into spurs by a cap
 //!    across most of the wall, does not reach (`open_end_in`); else, where the hole has bitten
@@ -69,9 +69,8 @@
 //!    is intact. The offsets over the hole are then the biharmonic interpolation of the
 //!    readings on the tube's wall chart (arc length × arc of the section, the second
 //!    difference around weighing [`super::wall_chart::AROUND_WEIGHT`] of the one along;
-//!    `wall_chart`), so the
-//!    missing part of a section takes its shape, slope and bulge from the wall beside it,
-//!    around the vessel as well as along it; on a tube with no second anchor a filled offset
+//!    `wall_chart`), so the missing part of a section takes its shape, slope and bulge from the
+//!    wall beside it, around the vessel as well as along it; on a tube with no second anchor a filled offset
 //!    pushes the wall out by at most [`MAX_FILLED_BULGE`] of the section's radius (past the
 //!    last reading, towards a junction point, the interpolation's slope runs on; between two
 //!    anchors the readings on either side hold it, and a bulb's wall over a hole may stand
@@ -246,7 +245,7 @@ pub const JUNCTION_CHART_TENSION: f64 = 1.0;
 pub const JUNCTION_MIN_RADIUS: f64 = 0.5;
 
 /// Tangent lengths of a junction branch's Hermite curve, at its anchor and at the junction
-/// point, as multiples of [`hermite`]'s (the chord's, for a circular bend): a vessel runs on along
+/// point, as multiples of `hermite`'s (the chord's, for a circular bend): a vessel runs on along
 /// its own axis up to the bifurcation and turns into the junction point inside the flare, where
 /// the curve with equal tangents cut the corner from the anchor. In seed 27's capped-aorta chop
 /// over the carina of `benches/repair_real` the left iliac's curve ran 3 mm inside the truth's
