@@ -9,7 +9,7 @@
 //! healthy lumen, not a farther bulge), levels off after rising 5% from the point (under 1%
 //! more over the next median radius: the lumen beside a lesion, not the widest one up the
 //! vessel's taper or flare beyond it), rises slowest before quickening again (the lesion's
-//! flank meeting a bulb's flare, see [`QUICKEN`]), or [`SHOULDER_REACH`] median diameters of
+//! flank meeting a bulb's flare, see `QUICKEN`), or [`SHOULDER_REACH`] median diameters of
 //! arc. A side whose reach runs past the measured points while the diameter is still rising
 //! towards them (a junction's unmeasured flare, a branch end next to the lesion) has no known
 //! shoulder; the other side's is used.

@@ -309,7 +309,7 @@ const STITCH_BEYOND_VOXELS: f64 = 2.0;
 const PATCH_COARSE_RADIUS_VOXELS: f64 = 12.0;
 
 /// Every how many nodes of the fill's grid (voxel `h`) its surface is meshed for the patch: 2
-/// where the vessel's radius `r` is [`PATCH_COARSE_RADIUS_VOXELS`] voxels or more and 2h is no
+/// where the vessel's radius `r` is `PATCH_COARSE_RADIUS_VOXELS` voxels or more and 2h is no
 /// longer than the input's `mean_edge` (the default voxel is half of it), else 1. The fill itself
 /// needs the fine grid (its tubes, a junction's shave); its surface does not always, nor does
 /// what follows the fill node by node (the known wall, the union, the blend and the islands run

@@ -308,7 +308,7 @@ pub fn stitch_patch(
 
 /// [`stitch_patch`] whose result must also pass `check` (a depth whose stitch fails the check
 /// is passed over like one that does not stitch), with what the check gave; Err: the first
-/// reason met. A stitch that passes with a triangle folded over ([`zipper`]) is taken only when
+/// reason met. A stitch that passes with a triangle folded over (`zipper`) is taken only when
 /// no later depth gives one without.
 pub fn stitch_patch_checked<T>(
     cut: &CutOut,
