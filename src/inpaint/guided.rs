@@ -1026,21 +1026,21 @@ fn closed_end_section(
     let into = (pts.first()? - tip).try_normalize(1e-12)?;
     let e1 = any_perpendicular(&into);
     let e2 = into.cross(&e1);
-    let rays = sections.rays.max(8);
+    let dirs = ray_dirs(sections.rays.max(8));
     let mut circle = (tip, 0.0);
     for _ in 0..2 {
         let c = circle.0;
         // The intact wall the rays meet.
-        let rim: Vec<Point3<f64>> = (0..rays)
-            .filter_map(|j| {
-                let th = TAU * j as f64 / rays as f64;
-                let d = e1 * th.cos() + e2 * th.sin();
+        let rim: Vec<Point3<f64>> = dirs
+            .iter()
+            .filter_map(|&(cs, sn)| {
+                let d = e1 * cs + e2 * sn;
                 let hit = sections.bvh.cast_ray(&c, &d, 2.0 * radius)?;
                 let wall = c + d * hit.t;
                 (!sections.is_cap(hit.face) && !in_e(&wall)).then_some(wall)
             })
             .collect();
-        if rim.len() * 2 < rays {
+        if rim.len() * 2 < dirs.len() {
             return None;
         }
         circle = circle_in_plane(&rim, &into, &tip)?;
