@@ -908,6 +908,22 @@ fn a_chop_beside_a_closed_end_follows_the_vessel_to_its_end() {
     check_bench_chop("aorta_abdominal_capped.stl", d, "dead-end", 3.0, 0.03, what);
 }
 
+/// The coronary's bend chop in `benches/repair_real`'s draw of seed 34: the hole takes the inner
+/// side of a 48° bend, where the wall folds into a crease. The cubic between the anchors cut the
+/// bend's corner so near the hole's cap that no section of its middle read the far wall, and
+/// the tube overfilled the crease: 1.91h / +10.2% in D (MeshLib 1.17h). The coronary's sections
+/// are round, so the curve is now moved onto the centre of half a section of intact wall, in
+/// five passes (`guided::ROUND_SECTION`).
+#[test]
+fn a_hole_inside_the_coronarys_bend_does_not_fill_its_crease() {
+    let d = Ball {
+        center: Point3::new(27.259186240369914, -26.743708474649445, 61.588902951149606),
+        radius: 1.6564773312272627,
+    };
+    let what = "seed 34's coronary bend chop";
+    check_bench_chop("coronary_stenosis_xray.stl", d, "through", 1.5, 0.07, what);
+}
+
 /// End bites of the aneurysm in `benches/repair_real --end-bites` (../shared/data/real; the chop:
 /// every triangle with a corner in a ball of 1.5 local radii, the largest piece kept) that take
 /// its short ICA branch whole, from its open end to past the junction or to the parent beside
