@@ -283,6 +283,11 @@
 //! junction fills' mean 4.14h → 3.78h); seeds 21–35 re-run: all 375 median 1.09h / 1.4%, 205
 //! within 1.5h and 5%, 323 within 3h, MeshLib beaten on 359, pymeshfix and pymeshlab 371;
 //! our whole command on a chop median 0.36–0.49 s per draw.
+//! Then a round vessel's curve through a hole is moved onto the intact wall's centre from half
+//! a section of wall, in five passes (`guided::ROUND_SECTION`; seed 34's coronary bend chop
+//! 1.91h → 1.08h); seeds 21–35 re-run: all 375 median 1.08h / 1.3%, 206 within 1.5h and 5%,
+//! 323 within 3h, every draw's median within 1.5h (seed 34 1.24h), MeshLib beaten on 361,
+//! pymeshfix and pymeshlab 371; our whole command on a chop median 0.41–0.49 s per draw.
 //!
 //! Seed 21 per case (the run before):
 //!
