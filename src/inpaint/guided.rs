@@ -316,8 +316,8 @@ const ROUND_FIT: WallFit = WallFit {
 /// The spread of a section's radii: their standard deviation over their mean (None for an
 /// empty or degenerate section).
 fn radius_spread(radii: &[f64]) -> Option<f64> {
-    let mu = mean(radii);
-    if radii.is_empty() || !mu.is_finite() || mu <= 0.0 {
+    let mu = mean(radii); // NaN for no radii
+    if !mu.is_finite() || mu <= 0.0 {
         return None;
     }
     let var = radii.iter().map(|r| (r - mu).powi(2)).sum::<f64>() / radii.len() as f64;
