@@ -1690,10 +1690,10 @@ impl Sections<'_> {
         let branch = a.branch?;
         let rays = self.rays;
         let reach = 4.0 * a.radius;
-        let raw: Vec<Option<f64>> = (0..rays)
-            .map(|j| {
-                let th = TAU * j as f64 / rays as f64;
-                let d = frame[1] * th.cos() + frame[2] * th.sin();
+        let raw: Vec<Option<f64>> = ray_dirs(rays)
+            .into_iter()
+            .map(|(cs, sn)| {
+                let d = frame[1] * cs + frame[2] * sn;
                 self.bvh
                     .cast_ray(c, &d, reach)
                     .map(|hit| hit.t)
@@ -1773,6 +1773,7 @@ impl Sections<'_> {
         let known_inside = self.cap.is_some();
         let known_wall =
             |p: &Point3<f64>, face: u32| outside_e(p) || (known_inside && !self.is_cap(face));
+        let dirs = ray_dirs(m);
         let read: Vec<Option<f64>> = (0..points.len())
             .into_par_iter()
             .flat_map_iter(|i| {
@@ -1787,12 +1788,11 @@ impl Sections<'_> {
                 let outside =
                     (open_end || known_inside || outside_e(c)) && !(flat_end && i + 1 == n);
                 let known_wall = &known_wall;
-                (0..m).map(move |j| {
+                dirs.iter().enumerate().map(move |(j, &(cs, sn))| {
                     if !outside {
                         return None;
                     }
-                    let th = TAU * j as f64 / m as f64;
-                    let d = f[1] * th.cos() + f[2] * th.sin();
+                    let d = f[1] * cs + f[2] * sn;
                     let rho = base(i, j);
                     // Within a junction's flare the wall is no single vessel's (as for the
                     // anchors' sections); around a hole, the intact wall there is read too
@@ -1979,6 +1979,7 @@ impl Sections<'_> {
             return points;
         }
         let fr = frames(&points, into);
+        let dirs = ray_dirs(m);
         let inside_e = |p: &Point3<f64>| self.in_e(p);
         let fits: Vec<Option<Vector3<f64>>> = (0..n)
             .into_par_iter()
@@ -1986,9 +1987,8 @@ impl Sections<'_> {
                 let (c, f) = (&points[i], &fr[i]);
                 let mut known = Vec::new();
                 let mut angles = Vec::new();
-                for j in 0..m {
-                    let th = TAU * j as f64 / m as f64;
-                    let d = f[1] * th.cos() + f[2] * th.sin();
+                for (j, &(cs, sn)) in dirs.iter().enumerate() {
+                    let d = f[1] * cs + f[2] * sn;
                     let Some(hit) = self.bvh.cast_ray(c, &d, 1.5 * radius) else {
                         continue;
                     };
@@ -1997,7 +1997,7 @@ impl Sections<'_> {
                         && !self.is_cap(hit.face)
                         && on_branch(self.centerline, &wall, own, radius)
                     {
-                        known.push((hit.t * th.cos(), hit.t * th.sin()));
+                        known.push((hit.t * cs, hit.t * sn));
                         angles.push(j);
                     }
                 }
