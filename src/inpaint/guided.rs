@@ -1487,10 +1487,10 @@ fn radius_clear_of_open_ends(br: &Branch, i: usize, bvh: &MeshBvh, reach: f64) -
     let (c, t) = (br.points[i], br.tangent[i]);
     let u = any_perpendicular(&t);
     let v = t.cross(&u);
-    let mut hits: Vec<f64> = (0..END_SECTION_RAYS)
-        .filter_map(|j| {
-            let th = TAU * j as f64 / END_SECTION_RAYS as f64;
-            bvh.cast_ray(&c, &(u * th.cos() + v * th.sin()), reach)
+    let mut hits: Vec<f64> = ray_dirs(END_SECTION_RAYS)
+        .into_iter()
+        .filter_map(|(cs, sn)| {
+            bvh.cast_ray(&c, &(u * cs + v * sn), reach)
                 .map(|hit| hit.t)
                 .filter(|&d| d > 0.0)
         })
