@@ -315,6 +315,13 @@ fn a_hole_over_the_carina_does_not_keep_its_caps_web() {
     assert!(ve <= 0.12, "{ve}");
 }
 
+/// Region D (centre, radius) of the capped aorta's chop#1 in the benchmark's draw of seed 29,
+/// over the whole front of the bifurcation: the two tests below repair it.
+const SEED29_JUNCTION_CHOP: ([f64; 3], f64) = (
+    [222.9602717458809, 131.77253662387804, 28.718339448262288],
+    13.971884731559433,
+);
+
 /// The benchmark's chop#1 of the capped aorta in the draw of seed 29 (held out): a hole over the
 /// whole front of the bifurcation. The hole's cap dents the lumen and the damaged skeleton
 /// sprouts spurs, ten junctions in E; the one nearest the anchors, a spur's (inscribed radius
@@ -328,8 +335,8 @@ fn a_hole_over_the_carina_does_not_keep_its_caps_web() {
 fn a_junction_chop_joins_the_branches_at_the_bifurcation_not_at_a_spur() {
     let (hd, ve, report) = bench_chop(
         "aorta_abdominal_capped.stl",
-        [222.9602717458809, 131.77253662387804, 28.718339448262288],
-        13.971884731559433,
+        SEED29_JUNCTION_CHOP.0,
+        SEED29_JUNCTION_CHOP.1,
         "junction",
     );
     let notices = report["notices"].to_string();
@@ -349,8 +356,8 @@ fn a_junction_chop_joins_the_branches_at_the_bifurcation_not_at_a_spur() {
 fn a_tunnel_left_by_the_fill_is_closed() {
     let (_, _, report) = bench_chop_with(
         "aorta_abdominal_capped.stl",
-        [222.9602717458809, 131.77253662387804, 28.718339448262288],
-        13.971884731559433,
+        SEED29_JUNCTION_CHOP.0,
+        SEED29_JUNCTION_CHOP.1,
         "axial",
         "--holes --method axial",
     );
