@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Smoke run of the fuzz targets (issue 22); step 6 of tests/run_all.sh runs it at 60 s.
 #
-#   bash fuzz/smoke.sh [--asan] [SECONDS] [TARGET...]
+#   bash fuzz/smoke.sh [--asan] [--build-only | --no-build] [SECONDS] [TARGET...]
 #
 # Builds the targets, then runs them all at once (or the TARGETs named), each for SECONDS of
 # wall time (default 60) on a scratch copy of its seeds fuzz/seeds/<target>/, under nice, with a
@@ -22,16 +22,33 @@
 #
 #   bash fuzz/smoke.sh                  # every target, 60 s, all at once
 #   bash fuzz/smoke.sh --asan 600 stl   # one target for 10 minutes under AddressSanitizer
+#
+# --build-only builds and exits; --no-build runs what the last build left (tests/run_all.sh
+# builds while its Python steps run, which leave a core idle, then runs the targets).
 set -uo pipefail
 
 asan=false
-if [[ "${1:-}" == "--asan" ]]; then
-    asan=true
+build=true
+run=true
+while [[ "${1:-}" == --* ]]; do
+    case "$1" in
+    --asan) asan=true ;;
+    --build-only) run=false ;;
+    --no-build) build=false ;;
+    *)
+        echo "usage: bash fuzz/smoke.sh [--asan] [--build-only | --no-build] [SECONDS] [TARGET...]" >&2
+        exit 2
+        ;;
+    esac
     shift
+done
+if ! $build && ! $run; then
+    echo "smoke: --build-only and --no-build together do nothing" >&2
+    exit 2
 fi
 seconds="${1:-60}"
 if ! [[ "$seconds" =~ ^[1-9][0-9]*$ ]]; then
-    echo "usage: bash fuzz/smoke.sh [--asan] [SECONDS] [TARGET...]" >&2
+    echo "usage: bash fuzz/smoke.sh [--asan] [--build-only | --no-build] [SECONDS] [TARGET...]" >&2
     exit 2
 fi
 shift $(($# > 0 ? 1 : 0))
@@ -49,6 +66,11 @@ host="$(rustc -vV | sed -n 's/^host: //p')"
 start=$SECONDS
 
 if $asan; then
+    BIN="$FUZZ/target/$host/release"
+else
+    BIN="$FUZZ/target/$host/smoke"
+fi
+if $build && $asan; then
     if ! command -v cargo-fuzz >/dev/null; then
         echo "smoke: cargo-fuzz is not installed (cargo install cargo-fuzz)" >&2
         exit 2
@@ -56,8 +78,7 @@ if $asan; then
     echo "building the fuzz targets: cargo fuzz build -O -a (AddressSanitizer)"
     # cargo fuzz passes -Zsanitizer=address; RUSTC_BOOTSTRAP=1 lets the stable toolchain accept it.
     RUSTC_BOOTSTRAP=1 nice -n 19 cargo fuzz build -O -a || exit 2
-    BIN="$FUZZ/target/$host/release"
-else
+elif $build; then
     echo "building the fuzz targets: cargo build --profile smoke, coverage flags, no sanitizer"
     # cargo fuzz's flags but -Csanitizer, -Clink-dead-code and -Ccodegen-units=1 (faster to
     # build). --target keeps them off build scripts and proc macros.
@@ -67,10 +88,23 @@ else
         -Cllvm-args=-sanitizer-coverage-stack-depth
         -Cllvm-args=-simplifycfg-branch-fold-threshold=0)
     RUSTFLAGS="${flags[*]}" nice -n 19 cargo build --profile smoke --target "$host" || exit 2
-    BIN="$FUZZ/target/$host/smoke"
 fi
 built=$SECONDS
-echo "built in $((built - start)) s; running ${targets[*]} for $seconds s each, all at once"
+if ! $run; then
+    echo "built in $((built - start)) s"
+    exit 0
+fi
+for t in "${targets[@]}"; do
+    if [[ ! -x "$BIN/$t" ]]; then
+        echo "smoke: $BIN/$t is not built (run without --no-build)" >&2
+        exit 2
+    fi
+done
+if $build; then
+    echo "built in $((built - start)) s; running ${targets[*]} for $seconds s each, all at once"
+else
+    echo "running ${targets[*]} for $seconds s each, all at once (built beforehand)"
+fi
 
 WORK="$(mktemp -d)"
 trap 'rm -rf "$WORK"' EXIT
@@ -120,5 +154,9 @@ for t in "${targets[@]}"; do
     grep -A1 -E '(panicked at|^memory allocation of|Test unit written to)' "$log" | grep -v '^--$' | head -4 |
         sed 's/^/         /'
 done
-echo "smoke: $((SECONDS - start)) s wall time (build $((built - start)) s, run $((SECONDS - built)) s)"
+if $build; then
+    echo "smoke: $((SECONDS - start)) s wall time (build $((built - start)) s, run $((SECONDS - built)) s)"
+else
+    echo "smoke: $((SECONDS - start)) s wall time (run only)"
+fi
 exit $failed
