@@ -85,7 +85,6 @@ rust_seconds=$((SECONDS - rust_start))
 # The fuzz targets' build (its own workspace and target dir in fuzz/) runs under nice beside the
 # Python steps below, which leave a core idle; step 6 then only runs the targets.
 fuzz_build_pid=""
-fuzz_build_start=$SECONDS
 if ! $slow && [[ $fuzz_seconds -gt 0 ]]; then
     bash "$ROOT/fuzz/smoke.sh" --build-only >"$WORK/fuzz-build.log" 2>&1 &
     fuzz_build_pid=$!
@@ -131,10 +130,9 @@ if ! $slow; then
         fuzz_start=$SECONDS
         build_status=0
         wait "$fuzz_build_pid" || build_status=$?
-        fuzz_build_seconds=$((SECONDS - fuzz_build_start))
         cat "$WORK/fuzz-build.log"
         if [[ $build_status -eq 0 ]]; then
-            echo "(built beside steps 3 to 5: $fuzz_build_seconds s from their start, $((SECONDS - fuzz_start)) s waited for here)"
+            echo "(built beside steps 3 to 5; $((SECONDS - fuzz_start)) s of it waited for here)"
             bash "$ROOT/fuzz/smoke.sh" --no-build "$fuzz_seconds" || fuzz_status=$?
         else
             echo "fuzz smoke: the fuzz targets' build failed (exit $build_status)" >&2
