@@ -27,6 +27,7 @@
 # builds while its Python steps run, which leave a core idle, then runs the targets).
 set -uo pipefail
 
+usage="usage: bash fuzz/smoke.sh [--asan] [--build-only | --no-build] [SECONDS] [TARGET...]"
 asan=false
 build=true
 run=true
@@ -36,7 +37,7 @@ while [[ "${1:-}" == --* ]]; do
     --build-only) run=false ;;
     --no-build) build=false ;;
     *)
-        echo "usage: bash fuzz/smoke.sh [--asan] [--build-only | --no-build] [SECONDS] [TARGET...]" >&2
+        echo "$usage" >&2
         exit 2
         ;;
     esac
@@ -48,7 +49,7 @@ if ! $build && ! $run; then
 fi
 seconds="${1:-60}"
 if ! [[ "$seconds" =~ ^[1-9][0-9]*$ ]]; then
-    echo "usage: bash fuzz/smoke.sh [--asan] [--build-only | --no-build] [SECONDS] [TARGET...]" >&2
+    echo "$usage" >&2
     exit 2
 fi
 shift $(($# > 0 ? 1 : 0))
@@ -154,9 +155,5 @@ for t in "${targets[@]}"; do
     grep -A1 -E '(panicked at|^memory allocation of|Test unit written to)' "$log" | grep -v '^--$' | head -4 |
         sed 's/^/         /'
 done
-if $build; then
-    echo "smoke: $((SECONDS - start)) s wall time (build $((built - start)) s, run $((SECONDS - built)) s)"
-else
-    echo "smoke: $((SECONDS - start)) s wall time (run only)"
-fi
+echo "smoke: $((SECONDS - start)) s wall time (build $((built - start)) s, run $((SECONDS - built)) s)"
 exit $failed
