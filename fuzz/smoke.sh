@@ -95,15 +95,15 @@ if ! $run; then
     echo "built in $((built - start)) s"
     exit 0
 fi
-for t in "${targets[@]}"; do
-    if [[ ! -x "$BIN/$t" ]]; then
-        echo "smoke: $BIN/$t is not built (run without --no-build)" >&2
-        exit 2
-    fi
-done
 if $build; then
     echo "built in $((built - start)) s; running ${targets[*]} for $seconds s each, all at once"
 else
+    for t in "${targets[@]}"; do
+        if [[ ! -x "$BIN/$t" ]]; then
+            echo "smoke: $BIN/$t is not built (run without --no-build)" >&2
+            exit 2
+        fi
+    done
     echo "running ${targets[*]} for $seconds s each, all at once (built beforehand)"
 fi
 
