@@ -699,8 +699,8 @@ fn feature(cl: &Centerline) -> Option<(Point3<f64>, f64, String)> {
     best.map(|(turn, p, r)| (p, r, format!("bend {:.0}°", turn.to_degrees())))
 }
 
-/// The wall points of the chops with their local radius and a tag (see the module docs).
-fn chop_points(v: &Vessel, rng: &mut SplitMix) -> Vec<(Point3<f64>, f64, String)> {
+/// `count` wall points for chops with their local radius and a tag (see the module docs).
+fn chop_points(v: &Vessel, rng: &mut SplitMix, count: usize) -> Vec<(Point3<f64>, f64, String)> {
     let sampler = AreaSampler::new(&v.mesh);
     let mut found: Vec<(Point3<f64>, f64, String)> = Vec::new();
     if let Some((q, rq, what)) = v.centerline.as_ref().and_then(feature) {
@@ -720,7 +720,7 @@ fn chop_points(v: &Vessel, rng: &mut SplitMix) -> Vec<(Point3<f64>, f64, String)
     }
     for apart in [2.0, 1.0] {
         for _ in 0..DRAWS {
-            if found.len() == CHOPS {
+            if found.len() == count {
                 return found;
             }
             let p = sampler.draw(&v.mesh, rng);
@@ -907,6 +907,19 @@ fn largest_component(mesh: &TriMesh) -> TriMesh {
     )
 }
 
+/// How many triangles a chop removed, and how many more went with the pieces it cut off.
+fn removed_note(v: &Vessel, holed: &TriMesh, dropped: usize) -> String {
+    format!(
+        "{} triangles removed{}",
+        v.mesh.num_faces() - holed.num_faces(),
+        if dropped > 0 {
+            format!(", {dropped} more in smaller pieces")
+        } else {
+            String::new()
+        }
+    )
+}
+
 fn chop_case(v: &Vessel, n: usize, p: Point3<f64>, r: f64, tag: &str) -> Case {
     let cut = CHOP * r;
     let holed = without(&v.mesh, |f| {
@@ -919,19 +932,141 @@ fn chop_case(v: &Vessel, n: usize, p: Point3<f64>, r: f64, tag: &str) -> Case {
         label: format!("chop#{n} ({tag})"),
         slug: format!("chop{n}"),
         kind: Kind::Chop,
-        note: format!(
-            "{} triangles removed{}",
-            v.mesh.num_faces() - holed.num_faces(),
-            if dropped > 0 {
-                format!(", {dropped} more in smaller pieces")
-            } else {
-                String::new()
-            }
-        ),
+        note: removed_note(v, &holed, dropped),
         damaged,
         region: Ball {
             center: p,
             radius: CHOP_REGION * r,
+        },
+        radius: r,
+    }
+}
+
+/// Which cases a run draws: the acceptance's, or a study's (`--end-bites`, `--shapes`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Study {
+    Acceptance,
+    EndBites,
+    Shapes,
+}
+
+/// The damage of the `--shapes` study, one of each per vessel on the chops' wall points.
+const SHAPES: [Shape; 5] = [
+    Shape::Slit,
+    Shape::Ellipsoid,
+    Shape::Pair,
+    Shape::Small,
+    Shape::Big,
+];
+
+/// A shape of damage other than the acceptance's ball of 1.5R ([`shape_case`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Shape {
+    /// Within 0.35R of a line along the wall, 2R either side of the point: a slit.
+    Slit,
+    /// An ellipsoid of semi-axes 2.5R along a random direction and R across it.
+    Ellipsoid,
+    /// Two balls of 0.9R, 1.6R apart along the wall.
+    Pair,
+    /// A ball of 0.6R: a hole in the wall alone.
+    Small,
+    /// A ball of 2.2R, every piece kept: it may cut the vessel in two.
+    Big,
+}
+
+impl Shape {
+    fn as_str(self) -> &'static str {
+        match self {
+            Shape::Slit => "slit",
+            Shape::Ellipsoid => "ellipsoid",
+            Shape::Pair => "pair",
+            Shape::Small => "small",
+            Shape::Big => "big",
+        }
+    }
+}
+
+/// Whether a point lies in a shape of damage.
+type InShape = Box<dyn Fn(&Point3<f64>) -> bool>;
+
+/// A uniformly random unit vector.
+fn random_direction(rng: &mut SplitMix) -> Vector3<f64> {
+    let z = 2.0 * rng.uniform() - 1.0;
+    let a = std::f64::consts::TAU * rng.uniform();
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    Vector3::new(s * a.cos(), s * a.sin(), z)
+}
+
+/// The `--shapes` study's case of `shape` on wall point `p` (local radius `r`): every triangle
+/// with a vertex in the shape removed, the largest piece kept, as a chop; D = the ball on `p`
+/// of 1.3 × the shape's reach from `p`.
+fn shape_case(
+    v: &Vessel,
+    n: usize,
+    shape: Shape,
+    p: Point3<f64>,
+    r: f64,
+    tag: &str,
+    rng: &mut SplitMix,
+) -> Case {
+    let normal = v
+        .mesh
+        .face_normal_raw(v.bvh.closest_point(&p).face as usize)
+        .try_normalize(1e-300)
+        .unwrap_or_else(Vector3::z);
+    // A random direction along the wall (its part along the normal taken off).
+    let along_wall = {
+        let d = random_direction(rng);
+        (d - normal * d.dot(&normal))
+            .try_normalize(1e-9)
+            .unwrap_or_else(|| normal.cross(&Vector3::x()).normalize())
+    };
+    let axis = random_direction(rng);
+    let pair = p + along_wall * (1.6 * r);
+    let (inside, reach): (InShape, f64) = match shape {
+        Shape::Slit => (
+            Box::new(move |x| {
+                let d = x - p;
+                let s = d.dot(&along_wall);
+                s.abs() < 2.0 * r && (d - along_wall * s).norm() < 0.35 * r
+            }),
+            2.0 * r,
+        ),
+        Shape::Ellipsoid => (
+            Box::new(move |x| {
+                let d = x - p;
+                let s = d.dot(&axis);
+                (s / (2.5 * r)).powi(2) + ((d - axis * s).norm() / r).powi(2) < 1.0
+            }),
+            2.5 * r,
+        ),
+        Shape::Pair => (
+            Box::new(move |x| (x - p).norm() < 0.9 * r || (x - pair).norm() < 0.9 * r),
+            2.5 * r,
+        ),
+        Shape::Small => (Box::new(move |x| (x - p).norm() < 0.6 * r), 0.6 * r),
+        Shape::Big => (Box::new(move |x| (x - p).norm() < 2.2 * r), 2.2 * r),
+    };
+    let holed = without(&v.mesh, |f| {
+        f.iter().any(|&i| inside(&v.mesh.vertices[i as usize]))
+    });
+    // A big ball may cut the vessel in two: both pieces are kept, a gap to bridge (as the
+    // occlusion's); the other shapes leave the wall whole around them.
+    let damaged = if shape == Shape::Big {
+        holed.clone()
+    } else {
+        largest_component(&holed)
+    };
+    let dropped = holed.num_faces() - damaged.num_faces();
+    Case {
+        label: format!("{}#{n} ({tag})", shape.as_str()),
+        slug: shape.as_str().into(),
+        kind: Kind::Chop,
+        note: removed_note(v, &holed, dropped),
+        damaged,
+        region: Ball {
+            center: p,
+            radius: 1.3 * reach,
         },
         radius: r,
     }
@@ -1036,12 +1171,19 @@ fn occlusion_case(v: &Vessel, site: &Site) -> Case {
     }
 }
 
-/// The five cases of a vessel (fewer when no place fits), or with `end_bites` its end bites
-/// ([`end_bite_points`]), printing where each lies.
-fn cases(v: &Vessel, index: u64, seed: u64, end_bites: bool) -> Vec<Case> {
+/// The five cases of a vessel (fewer when no place fits), or those of a study: its end bites
+/// ([`end_bite_points`]) or its damage of other shapes ([`shape_case`]).
+fn cases(v: &Vessel, index: u64, seed: u64, study: Study) -> Vec<Case> {
     let mut out = Vec::new();
     let mut rng = SplitMix(seed ^ (index << 32));
-    if end_bites {
+    if study == Study::Shapes {
+        let points = chop_points(v, &mut rng, SHAPES.len());
+        for (n, ((p, r, tag), shape)) in points.into_iter().zip(SHAPES).enumerate() {
+            out.push(shape_case(v, n + 1, shape, p, r, &tag, &mut rng));
+        }
+        return out;
+    }
+    if study == Study::EndBites {
         let bites = end_bite_points(v, &mut rng);
         if bites.is_empty() {
             println!("  no open end: no end bite");
@@ -1051,7 +1193,7 @@ fn cases(v: &Vessel, index: u64, seed: u64, end_bites: bool) -> Vec<Case> {
         }
         return out;
     }
-    let chops = chop_points(v, &mut rng);
+    let chops = chop_points(v, &mut rng, CHOPS);
     if chops.len() < CHOPS {
         println!("  only {} wall point(s) away from the ends", chops.len());
     }
@@ -1925,7 +2067,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let mut only = Vec::new();
     let mut keep: Option<PathBuf> = None;
-    let mut end_bites = false;
+    let mut study = Study::Acceptance;
     let mut seeds = vec![SEED];
     seeds.extend(HELD_OUT);
     while let Some(a) = args.next() {
@@ -1942,7 +2084,9 @@ fn main() {
         } else if let Some(dir) = a.strip_prefix("--keep=") {
             keep = Some(PathBuf::from(dir));
         } else if a == "--end-bites" {
-            end_bites = true;
+            study = Study::EndBites;
+        } else if a == "--shapes" {
+            study = Study::Shapes;
         } else if !a.starts_with("--") {
             only.push(a);
         }
@@ -2002,7 +2146,7 @@ fn main() {
                 cl.map_or(0, |c| c.junctions.len()),
             );
             let mut results = Vec::new();
-            for case in cases(vessel, *index, seed, end_bites) {
+            for case in cases(vessel, *index, seed, study) {
                 let c = case.region.center;
                 println!(
                     "  {}: R = {}, D = ball ({}, {}, {}) radius {}; {}",

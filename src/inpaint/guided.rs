@@ -2075,8 +2075,14 @@ impl Sections<'_> {
                 }
             })
             .collect();
-        // A moving average over about one radius of arc, the ends kept at 0.
+        // A moving average over about one radius of arc, falling to 0 at the curve's ends over
+        // half a radius (a smoothstep). The samples lie a fraction of a voxel apart, and an
+        // end kept at 0 beside a neighbour moved by the average bent the curve's end sideways:
+        // an anchor inside E (its section clear of D, its point not) has fits up to the curve's
+        // last sample, and the tube, continued straight past that end along its last tangent,
+        // stood out of the wall as a fin 7 mm long (a slit in the open aorta's wall: 22.6h).
         let half = radius * 0.5;
+        let total = arc[n - 1];
         (0..n)
             .map(|i| {
                 if i == 0 || i + 1 == n {
@@ -2087,7 +2093,8 @@ impl Sections<'_> {
                     sum += offset[k];
                     count += 1.0;
                 }
-                points[i] + sum / count
+                let x = (arc[i].min(total - arc[i]) / half).clamp(0.0, 1.0);
+                points[i] + sum / count * (x * x * (3.0 - 2.0 * x))
             })
             .collect()
     }
