@@ -57,6 +57,16 @@ impl Default for LoopOptions {
 /// 0.20, taken for an end and capped without a word before).
 pub const ROUGH_END_PLANARITY: f64 = 0.05;
 
+/// Two rough ends ([`LoopInfo::is_rough_end`]) whose centroids lie within this many sums of
+/// their radii, each facing the other ([`GAP_FACING`]), are taken for one vessel cut in two by
+/// the damage, its pieces kept: `--holes` bridges the gap between them ([`gap_balls`]).
+pub const GAP_REACH: f64 = 3.0;
+
+/// How squarely two rough ends of a gap face each other: the cosine between each one's plane
+/// normal and the line joining their centroids is at least this (a severed junction's daughters
+/// leave the parent's axis by 20–40°).
+pub const GAP_FACING: f64 = 0.7;
+
 /// One boundary loop and its classification.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoopInfo {
@@ -220,4 +230,84 @@ pub fn hole_balls(loops: &[LoopInfo], options: &LoopOptions) -> Result<Vec<Ball>
         )));
     }
     Ok(balls)
+}
+
+/// The groups of rough ends ([`LoopInfo::is_rough_end`]) that face each other across a short gap
+/// ([`GAP_REACH`], [`GAP_FACING`]), joined through shared members (a junction severed from its
+/// branches, every piece kept, gives a group of three): each a vessel cut in two or more by the
+/// damage. Clipped ends lie within 10⁻⁴ of their plane and never join one. Indices into `loops`,
+/// in order; a rough end with no partner is in no group.
+pub fn gap_groups(loops: &[LoopInfo]) -> Vec<Vec<usize>> {
+    let rough: Vec<usize> = (0..loops.len())
+        .filter(|&i| loops[i].is_rough_end())
+        .collect();
+    let faces = |a: &LoopInfo, b: &LoopInfo| {
+        let d = b.center - a.center;
+        let len = d.norm();
+        len > 0.0
+            && len <= GAP_REACH * (a.radius + b.radius)
+            && (a.normal.dot(&d) / len).abs() >= GAP_FACING
+            && (b.normal.dot(&d) / len).abs() >= GAP_FACING
+    };
+    // Union-find over the rough ends.
+    let mut parent: Vec<usize> = (0..rough.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for i in 0..rough.len() {
+        for j in i + 1..rough.len() {
+            if faces(&loops[rough[i]], &loops[rough[j]]) {
+                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut group_of = vec![usize::MAX; rough.len()];
+    for i in 0..rough.len() {
+        let r = root(&mut parent, i);
+        if group_of[r] == usize::MAX {
+            group_of[r] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[group_of[r]].push(rough[i]);
+    }
+    groups.retain(|g| g.len() >= 2);
+    groups
+}
+
+/// One ball per gap group ([`gap_groups`]): centred on the mean of its loops' centroids, with
+/// radius `ball_factor` × the largest distance of a loop vertex from that centre plus the loops'
+/// mean edge, so that the gap and both cut ends lie inside it (as a hole's ball holds its loop).
+pub fn gap_balls(
+    mesh: &TriMesh,
+    loops: &[LoopInfo],
+    groups: &[Vec<usize>],
+    options: &LoopOptions,
+) -> Vec<Ball> {
+    groups
+        .iter()
+        .map(|g| {
+            let center = Point3::from(
+                g.iter()
+                    .map(|&i| loops[i].center.coords)
+                    .sum::<Vector3<f64>>()
+                    / g.len() as f64,
+            );
+            let farthest = g
+                .iter()
+                .flat_map(|&i| loops[i].vertices.iter())
+                .map(|&v| (mesh.vertices[v as usize] - center).norm())
+                .fold(0.0, f64::max);
+            let edge = g.iter().map(|&i| loops[i].mean_edge).sum::<f64>() / g.len() as f64;
+            Ball {
+                center,
+                radius: options.ball_factor * farthest + edge,
+            }
+        })
+        .collect()
 }

@@ -17,7 +17,9 @@
 //!    the parameters and timings. An output that is not watertight (ends not kept open) is an
 //!    error.
 
-use super::holes::{classify_loops, hole_balls, LoopKind, LoopOptions};
+use super::holes::{
+    classify_loops, gap_balls, gap_groups, hole_balls, LoopInfo, LoopKind, LoopOptions,
+};
 use super::region::{read_regions, Ball, PickedSite};
 use super::region_limits::check_regions;
 pub use super::region_limits::MAX_REGIONS;
@@ -308,15 +310,32 @@ fn repair_traced(
     let mut loops = Vec::new();
     if request.holes {
         let infos = classify_loops(mesh, &LoopOptions::default());
-        for l in infos.iter().filter(|l| l.is_rough_end()) {
+        let gaps = gap_groups(&infos);
+        let in_gap = |i: usize| gaps.iter().any(|g| g.contains(&i));
+        let at = |l: &LoopInfo| {
             let [x, y, z] = [l.center.x, l.center.y, l.center.z].map(short_number);
+            format!("({x}, {y}, {z})")
+        };
+        for (i, l) in infos.iter().enumerate() {
+            if l.is_rough_end() && !in_gap(i) {
+                notices.push(format!(
+                    "the loop at {} is taken for an open vessel end, yet lies {:.0}% of its \
+                     radius off its plane (clipped ends: under 1%): if the damage cut the vessel \
+                     there, what lay beyond is not restored",
+                    at(l),
+                    100.0 * l.planarity,
+                ));
+            }
+        }
+        for g in &gaps {
+            let ends: Vec<String> = g.iter().map(|&i| at(&infos[i])).collect();
             notices.push(format!(
-                "the loop at ({x}, {y}, {z}) is taken for an open vessel end, yet lies {:.0}% of \
-                 its radius off its plane (clipped ends: under 1%): if the damage cut the vessel \
-                 there, what lay beyond is not restored",
-                100.0 * l.planarity,
+                "the loops at {} are not planar as clipped ends are, and face each other: taken \
+                 for a vessel the damage cut through, its pieces kept, and bridged across the gap",
+                ends.join(" and "),
             ));
         }
+        let gap_regions = gap_balls(mesh, &infos, &gaps, &LoopOptions::default());
         if infos.iter().any(|l| l.kind == LoopKind::Hole) {
             let holes = hole_balls(&infos, &LoopOptions::default())
                 .map_err(|e| e.context(format!("{name}: --holes")))?;
@@ -324,7 +343,7 @@ fn repair_traced(
                 balls.push(b);
                 sources.push("hole".into());
             }
-        } else {
+        } else if gap_regions.is_empty() {
             notices.push(if infos.is_empty() {
                 "no holes found (the mesh is closed): nothing to inpaint".to_string()
             } else {
@@ -335,10 +354,16 @@ fn repair_traced(
                 )
             });
         }
+        for b in gap_regions {
+            balls.push(b);
+            sources.push("gap".into());
+        }
         loops = infos
             .iter()
-            .map(|l| LoopReport {
+            .enumerate()
+            .map(|(i, l)| LoopReport {
                 kind: match l.kind {
+                    LoopKind::End if in_gap(i) => "cut end",
                     LoopKind::End => "open vessel end",
                     LoopKind::Hole => "hole",
                 },
