@@ -268,13 +268,13 @@ pub fn gap_groups(loops: &[LoopInfo]) -> Vec<Vec<usize>> {
     }
     let mut groups: Vec<Vec<usize>> = Vec::new();
     let mut group_of = vec![usize::MAX; rough.len()];
-    for i in 0..rough.len() {
+    for (i, &l) in rough.iter().enumerate() {
         let r = root(&mut parent, i);
         if group_of[r] == usize::MAX {
             group_of[r] = groups.len();
             groups.push(Vec::new());
         }
-        groups[group_of[r]].push(rough[i]);
+        groups[group_of[r]].push(l);
     }
     groups.retain(|g| g.len() >= 2);
     groups
