@@ -9,7 +9,9 @@ use common::*;
 use nalgebra::Point3;
 use std::path::Path;
 use vesselmsr::bvh::MeshBvh;
-use vesselmsr::inpaint::holes::{classify_loops, hole_regions, LoopKind, LoopOptions};
+use vesselmsr::inpaint::holes::{
+    classify_loops, gap_balls, gap_groups, hole_regions, LoopKind, LoopOptions,
+};
 use vesselmsr::inpaint::region::{
     local_vessel_radius, parse_ball, read_regions, validate_regions, Ball, PickedSite,
     PICKED_RADIUS_FACTOR,
@@ -290,6 +292,75 @@ fn open_tube_has_two_ends() {
     let closed = icosphere(2, 1.0, Point3::origin());
     assert!(err_text(hole_regions(&closed, &LoopOptions::default()))
         .contains("mesh has no boundary loops"));
+}
+
+/// The tube cut through by a band 3 long about z = 15 whose edges rise and fall by 0.5 twice
+/// around (a saddle, which no plane fits: the cuts lie 17% of the radius off their planes, where
+/// a clipped end lies within 10⁻⁴), both pieces kept; or, with `cut` false, a short tube whose
+/// two ends are made as rough.
+fn rough_cut_tube(cut: bool) -> TriMesh {
+    let rough = |p: &Point3<f64>| 0.5 * (2.0 * p.y.atan2(p.x)).sin();
+    if cut {
+        let tube = tube3();
+        let faces = tube
+            .faces
+            .iter()
+            .filter(|f| {
+                let c = f
+                    .iter()
+                    .map(|&v| tube.vertices[v as usize].coords)
+                    .sum::<nalgebra::Vector3<f64>>()
+                    / 3.0;
+                (c.z - 15.0 - rough(&Point3::from(c))).abs() > 1.5
+            })
+            .copied()
+            .collect();
+        TriMesh::new(tube.vertices.clone(), faces)
+    } else {
+        let mut tube = open_tube(3.0, 10.0, 48, 21);
+        for p in tube.vertices.iter_mut() {
+            if p.z == 0.0 || p.z == 10.0 {
+                p.z += rough(p);
+            }
+        }
+        tube
+    }
+}
+
+#[test]
+fn rough_ends_facing_across_a_gap_are_one_region_and_a_short_tubes_are_not() {
+    let options = LoopOptions::default();
+    let cut = rough_cut_tube(true);
+    let loops = classify_loops(&cut, &options);
+    assert_eq!(loops.len(), 4);
+    let rough: Vec<usize> = (0..4).filter(|&i| loops[i].is_rough_end()).collect();
+    assert_eq!(rough.len(), 2, "{loops:?}");
+    let groups = gap_groups(&cut, &loops);
+    assert_eq!(groups, vec![rough.clone()]);
+    let balls = gap_balls(&cut, &loops, &groups, &options);
+    assert_eq!(balls.len(), 1);
+    // The ball holds both cut ends and the gap between them, not the clipped ends.
+    for &i in &rough {
+        assert!(loops[i]
+            .vertices
+            .iter()
+            .all(|&v| balls[0].contains(&cut.vertices[v as usize])));
+    }
+    assert!(
+        (balls[0].center - Point3::new(0.0, 0.0, 15.0)).norm() < 0.1,
+        "{:?}",
+        balls[0]
+    );
+    assert!(!balls[0].contains(&Point3::new(3.0, 0.0, 0.0)));
+    // A short tube with two rough ends facing each other: one piece, no gap.
+    let short = rough_cut_tube(false);
+    let loops = classify_loops(&short, &options);
+    assert_eq!(
+        loops.iter().filter(|l| l.is_rough_end()).count(),
+        2,
+        "{loops:?}"
+    );
+    assert!(gap_groups(&short, &loops).is_empty());
 }
 
 #[test]

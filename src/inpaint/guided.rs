@@ -1959,7 +1959,8 @@ impl Sections<'_> {
     /// the curve runs on the vessel's centreline, so the mean offset there on either side is the
     /// fit's bias (a section that is not round), taken off inside E linearly between the sides.
     /// The offsets inside E (at most half a radius) are interpolated between samples, fall to 0
-    /// towards the curve's ends and are smoothed over about one radius of arc. The wall around a
+    /// towards the curve's ends, are smoothed over about one radius of arc and fade out over
+    /// half a radius at both ends. The wall around a
     /// hole says where the vessel's axis runs better than a cubic between the anchors does at a
     /// bend (the coronary's 47° bend: 3.36h → 1.59h).
     fn recentre(

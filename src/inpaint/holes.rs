@@ -8,9 +8,14 @@
 //! so the wall next to it has normals lying in the loop's plane (|wall normal · plane normal| near
 //! 0). A hole in the wall has the wall's normals along its plane normal (near 1), or is not planar
 //! at all. Anything that is not a clear end is a hole.
+//!
+//! An end that is planar only roughly (a "rough end": segmentations are clipped by planes, damage
+//! is not) may be a cut the damage made through the whole vessel. Where its pieces are kept, two
+//! or more such ends face each other across a short gap ([`gap_groups`]): that gap is a region
+//! of its own ([`gap_balls`]), which the fill bridges as it bridges an occlusion.
 
 use crate::inpaint::region::Ball;
-use crate::mesh::topology::boundary_loops;
+use crate::mesh::topology::{boundary_loops, connected_components};
 use crate::mesh::TriMesh;
 use crate::{Error, Result};
 use nalgebra::{Matrix3, Point3, Vector3};
@@ -235,13 +240,30 @@ pub fn hole_balls(loops: &[LoopInfo], options: &LoopOptions) -> Result<Vec<Ball>
 /// The groups of rough ends ([`LoopInfo::is_rough_end`]) that face each other across a short gap
 /// ([`GAP_REACH`], [`GAP_FACING`]), joined through shared members (a junction severed from its
 /// branches, every piece kept, gives a group of three): each a vessel cut in two or more by the
-/// damage. Clipped ends lie within 10⁻⁴ of their plane and never join one. Indices into `loops`,
-/// in order; a rough end with no partner is in no group.
-pub fn gap_groups(loops: &[LoopInfo]) -> Vec<Vec<usize>> {
+/// damage. Clipped ends lie within 10⁻⁴ of their plane and never join one; nor do two ends of
+/// one connected piece of `mesh` (a short vessel between two rough cuts: what lies between its
+/// ends is that vessel, not a gap). Indices into `loops`, in order; a rough end with no partner
+/// is in no group.
+pub fn gap_groups(mesh: &TriMesh, loops: &[LoopInfo]) -> Vec<Vec<usize>> {
     let rough: Vec<usize> = (0..loops.len())
         .filter(|&i| loops[i].is_rough_end())
         .collect();
+    if rough.len() < 2 {
+        return Vec::new();
+    }
+    // The piece of each vertex (that of a face holding it).
+    let (_, labels) = connected_components(mesh);
+    let mut piece = vec![u32::MAX; mesh.num_vertices()];
+    for (f, &l) in mesh.faces.iter().zip(&labels) {
+        for &v in f {
+            piece[v as usize] = l;
+        }
+    }
+    let piece_of = |l: &LoopInfo| l.vertices.first().map(|&v| piece[v as usize]);
     let faces = |a: &LoopInfo, b: &LoopInfo| {
+        if piece_of(a) == piece_of(b) {
+            return false;
+        }
         let d = b.center - a.center;
         let len = d.norm();
         len > 0.0

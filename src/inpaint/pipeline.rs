@@ -310,7 +310,7 @@ fn repair_traced(
     let mut loops = Vec::new();
     if request.holes {
         let infos = classify_loops(mesh, &LoopOptions::default());
-        let gaps = gap_groups(&infos);
+        let gaps = gap_groups(mesh, &infos);
         let in_gap = |i: usize| gaps.iter().any(|g| g.contains(&i));
         let at = |l: &LoopInfo| {
             let [x, y, z] = [l.center.x, l.center.y, l.center.z].map(short_number);
