@@ -18,7 +18,8 @@
 mod common;
 
 use common::{
-    chopped, data_dir, hausdorff_in, one_sided_faces_near, punch_hole, vesselmsr, volume_error_in,
+    chopped, data_dir, hausdorff_in, loop_kinds, one_sided_faces_near, punch_hole, vesselmsr,
+    volume_error_in,
 };
 use nalgebra::Point3;
 use serde_json::Value;
@@ -260,12 +261,7 @@ fn a_bifurcation_cut_from_its_branches_is_bridged_with_holes() {
     };
     let dir = tempfile::tempdir().unwrap();
     let (hd, ve, report) = repair_and_check(file, &truth, &damaged, d, "--holes", dir.path());
-    let kinds: Vec<&str> = report["loops"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|l| l["kind"].as_str().unwrap())
-        .collect();
+    let kinds = loop_kinds(&report);
     assert_eq!(
         kinds.iter().filter(|k| **k == "cut end").count(),
         3,

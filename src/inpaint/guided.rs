@@ -91,6 +91,7 @@
 //! axial fill there).
 
 use super::adaptive::{sample_adaptive, AdaptiveOptions};
+use super::groups::linked_groups;
 use super::junction::{junction_point, smooth_min, Branch as AxisBranch};
 use super::region::Ball;
 use super::wall_chart::fill_with_tension;
@@ -409,33 +410,9 @@ struct Anchor {
 
 /// Groups of overlapping balls (indices), in order of their first ball.
 fn ball_groups(balls: &[Ball]) -> Vec<Vec<usize>> {
-    let mut group: Vec<usize> = (0..balls.len()).collect();
-    fn find(g: &mut [usize], mut i: usize) -> usize {
-        while g[i] != i {
-            g[i] = g[g[i]];
-            i = g[i];
-        }
-        i
-    }
-    for a in 0..balls.len() {
-        for b in a + 1..balls.len() {
-            if (balls[a].center - balls[b].center).norm() < balls[a].radius + balls[b].radius {
-                let (ra, rb) = (find(&mut group, a), find(&mut group, b));
-                group[ra.max(rb)] = ra.min(rb);
-            }
-        }
-    }
-    let mut out: Vec<Vec<usize>> = Vec::new();
-    let mut slot = vec![usize::MAX; balls.len()];
-    for i in 0..balls.len() {
-        let r = find(&mut group, i);
-        if slot[r] == usize::MAX {
-            slot[r] = out.len();
-            out.push(Vec::new());
-        }
-        out[slot[r]].push(i);
-    }
-    out
+    linked_groups(balls.len(), |a, b| {
+        (balls[a].center - balls[b].center).norm() < balls[a].radius + balls[b].radius
+    })
 }
 
 /// The guides of the balls: one per group of overlapping balls through which the centreline
@@ -1959,8 +1936,8 @@ impl Sections<'_> {
     /// the curve runs on the vessel's centreline, so the mean offset there on either side is the
     /// fit's bias (a section that is not round), taken off inside E linearly between the sides.
     /// The offsets inside E (at most half a radius) are interpolated between samples, fall to 0
-    /// towards the curve's ends, are smoothed over about one radius of arc and fade out over
-    /// half a radius at both ends. The wall around a
+    /// towards the curve's ends, are smoothed over about one radius of arc and fade out at both
+    /// ends over the arc that keeps the end's turn within [`END_FADE_SLOPE`]. The wall around a
     /// hole says where the vessel's axis runs better than a cubic between the anchors does at a
     /// bend (the coronary's 47° bend: 3.36h → 1.59h).
     fn recentre(
@@ -2076,30 +2053,56 @@ impl Sections<'_> {
                 }
             })
             .collect();
-        // A moving average over about one radius of arc, falling to 0 at the curve's ends over
-        // half a radius (a smoothstep). The samples lie a fraction of a voxel apart, and an
-        // end kept at 0 beside a neighbour moved by the average bent the curve's end sideways:
-        // an anchor inside E (its section clear of D, its point not) has fits up to the curve's
-        // last sample, and the tube, continued straight past that end along its last tangent,
-        // stood out of the wall as a fin 7 mm long (a slit in the open aorta's wall: 22.6h).
+        // A moving average over about one radius of arc, the ends kept at 0.
         let half = radius * 0.5;
         let total = arc[n - 1];
-        (0..n)
+        let averaged: Vec<Vector3<f64>> = (0..n)
             .map(|i| {
                 if i == 0 || i + 1 == n {
-                    return points[i];
+                    return Vector3::zeros();
                 }
                 let (mut sum, mut count) = (Vector3::zeros(), 0.0);
                 for k in (0..n).filter(|&k| (arc[k] - arc[i]).abs() <= half) {
                     sum += offset[k];
                     count += 1.0;
                 }
-                let x = (arc[i].min(total - arc[i]) / half).clamp(0.0, 1.0);
-                points[i] + sum / count * (x * x * (3.0 - 2.0 * x))
+                sum / count
+            })
+            .collect();
+        // Beside an end kept at 0, a sample moved by the average bends the curve: the samples lie
+        // a fraction of a voxel apart, and an anchor inside E (its section clear of D, its point
+        // not) has fits up to the curve's last sample; the tube, continued straight past that
+        // end along its last tangent, stood out of the wall as a fin 7 mm long (a slit in the
+        // open aorta's wall: 22.6h). So the average fades out at each end (a smoothstep) over
+        // the arc that keeps the curve's turn there within END_FADE_SLOPE: the largest offset
+        // within half a radius of the end over that slope, at most half a radius.
+        let fade = |near: &dyn Fn(usize) -> f64| {
+            let largest = (0..n)
+                .filter(|&i| near(i) <= half)
+                .map(|i| averaged[i].norm())
+                .fold(0.0, f64::max);
+            (1.5 * largest / END_FADE_SLOPE).min(half)
+        };
+        let (fade_start, fade_end) = (fade(&|i| arc[i]), fade(&|i| total - arc[i]));
+        let smooth = |d: f64, len: f64| {
+            if len <= 0.0 {
+                return 1.0;
+            }
+            let x = (d / len).clamp(0.0, 1.0);
+            x * x * (3.0 - 2.0 * x)
+        };
+        (0..n)
+            .map(|i| {
+                points[i]
+                    + averaged[i] * smooth(arc[i], fade_start) * smooth(total - arc[i], fade_end)
             })
             .collect()
     }
 }
+
+/// Largest slope (offset per arc length) by which the recentred curve's offset may fade out at
+/// its ends ([`Sections::recentre`]): a turn of its end tangent of about 6°.
+const END_FADE_SLOPE: f64 = 0.1;
 
 /// Centre of the circle fitted to 2-D points (Kåsa: least squares of x² + y² + Dx + Ey + F).
 fn fit_circle(pts: &[(f64, f64)]) -> Option<(f64, f64)> {

@@ -14,6 +14,7 @@
 //! or more such ends face each other across a short gap ([`gap_groups`]): that gap is a region
 //! of its own ([`gap_balls`]), which the fill bridges as it bridges an occlusion.
 
+use super::groups::linked_groups;
 use crate::inpaint::region::Ball;
 use crate::mesh::topology::{boundary_loops, connected_components};
 use crate::mesh::TriMesh;
@@ -271,35 +272,13 @@ pub fn gap_groups(mesh: &TriMesh, loops: &[LoopInfo]) -> Vec<Vec<usize>> {
             && (a.normal.dot(&d) / len).abs() >= GAP_FACING
             && (b.normal.dot(&d) / len).abs() >= GAP_FACING
     };
-    // Union-find over the rough ends.
-    let mut parent: Vec<usize> = (0..rough.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for i in 0..rough.len() {
-        for j in i + 1..rough.len() {
-            if faces(&loops[rough[i]], &loops[rough[j]]) {
-                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
-    let mut groups: Vec<Vec<usize>> = Vec::new();
-    let mut group_of = vec![usize::MAX; rough.len()];
-    for (i, &l) in rough.iter().enumerate() {
-        let r = root(&mut parent, i);
-        if group_of[r] == usize::MAX {
-            group_of[r] = groups.len();
-            groups.push(Vec::new());
-        }
-        groups[group_of[r]].push(l);
-    }
-    groups.retain(|g| g.len() >= 2);
-    groups
+    linked_groups(rough.len(), |i, j| {
+        faces(&loops[rough[i]], &loops[rough[j]])
+    })
+    .into_iter()
+    .filter(|g| g.len() >= 2)
+    .map(|g| g.into_iter().map(|i| rough[i]).collect())
+    .collect()
 }
 
 /// One ball per gap group ([`gap_groups`]): centred on the mean of its loops' centroids, with

@@ -7,6 +7,7 @@ pub mod adaptive;
 pub mod axial;
 pub mod axis;
 pub mod checks;
+pub(crate) mod groups;
 pub mod guided;
 pub mod harmonic;
 pub mod holes;

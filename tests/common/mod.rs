@@ -176,6 +176,16 @@ pub fn vesselmsr_json(args: &[&str]) -> Value {
     serde_json::from_slice(&out.stdout).expect("stdout is JSON")
 }
 
+/// The `kind` of every boundary loop a repair report lists (`hole`, `open vessel end`, ...).
+pub fn loop_kinds(report: &Value) -> Vec<&str> {
+    report["loops"]
+        .as_array()
+        .expect("the report lists the loops")
+        .iter()
+        .map(|l| l["kind"].as_str().expect("a loop's kind"))
+        .collect()
+}
+
 /// `vesselmsr info --json <path>`, parsed.
 pub fn info_json(path: &Path) -> Value {
     vesselmsr_json(&["info", "--json", path.to_str().unwrap()])
