@@ -10,7 +10,7 @@ use nalgebra::Point3;
 use std::path::Path;
 use vesselmsr::bvh::MeshBvh;
 use vesselmsr::inpaint::holes::{
-    classify_loops, gap_balls, gap_groups, hole_regions, LoopKind, LoopOptions,
+    classify_loops, gap_balls, gap_groups, gap_regions, hole_regions, LoopKind, LoopOptions,
 };
 use vesselmsr::inpaint::region::{
     local_vessel_radius, parse_ball, read_regions, validate_regions, Ball, PickedSite,
@@ -294,13 +294,13 @@ fn open_tube_has_two_ends() {
         .contains("mesh has no boundary loops"));
 }
 
-/// The tube cut through by a band 3 long about z = 15 whose edges rise and fall by 0.5 twice
+/// The tube cut through by a band 3 long about z = `cut` whose edges rise and fall by 0.5 twice
 /// around (a saddle, which no plane fits: the cuts lie 17% of the radius off their planes, where
-/// a clipped end lies within 10⁻⁴), both pieces kept; or, with `cut` false, a short tube whose
-/// two ends are made as rough.
-fn rough_cut_tube(cut: bool) -> TriMesh {
+/// a clipped end lies within 10⁻⁴), both pieces kept; or, with no `cut`, a short tube whose two
+/// ends are made as rough.
+fn rough_cut_tube(cut: Option<f64>) -> TriMesh {
     let rough = |p: &Point3<f64>| 0.5 * (2.0 * p.y.atan2(p.x)).sin();
-    if cut {
+    if let Some(z0) = cut {
         let tube = tube3();
         let faces = tube
             .faces
@@ -311,7 +311,7 @@ fn rough_cut_tube(cut: bool) -> TriMesh {
                     .map(|&v| tube.vertices[v as usize].coords)
                     .sum::<nalgebra::Vector3<f64>>()
                     / 3.0;
-                (c.z - 15.0 - rough(&Point3::from(c))).abs() > 1.5
+                (c.z - z0 - rough(&Point3::from(c))).abs() > 1.5
             })
             .copied()
             .collect();
@@ -330,7 +330,7 @@ fn rough_cut_tube(cut: bool) -> TriMesh {
 #[test]
 fn rough_ends_facing_across_a_gap_are_one_region_and_a_short_tubes_are_not() {
     let options = LoopOptions::default();
-    let cut = rough_cut_tube(true);
+    let cut = rough_cut_tube(Some(15.0));
     let loops = classify_loops(&cut, &options);
     assert_eq!(loops.len(), 4);
     let rough: Vec<usize> = (0..4).filter(|&i| loops[i].is_rough_end()).collect();
@@ -352,8 +352,9 @@ fn rough_ends_facing_across_a_gap_are_one_region_and_a_short_tubes_are_not() {
         balls[0]
     );
     assert!(!balls[0].contains(&Point3::new(3.0, 0.0, 0.0)));
+    assert_eq!(gap_regions(&cut, &loops, &options), (groups, balls));
     // A short tube with two rough ends facing each other: one piece, no gap.
-    let short = rough_cut_tube(false);
+    let short = rough_cut_tube(None);
     let loops = classify_loops(&short, &options);
     assert_eq!(
         loops.iter().filter(|l| l.is_rough_end()).count(),
@@ -361,6 +362,12 @@ fn rough_ends_facing_across_a_gap_are_one_region_and_a_short_tubes_are_not() {
         "{loops:?}"
     );
     assert!(gap_groups(&short, &loops).is_empty());
+    // Cut 3 from a clipped end: the stub between them gives the fill nothing to hold, and the
+    // gap's ball would hold the clipped end: no gap region.
+    let stub = rough_cut_tube(Some(3.0));
+    let loops = classify_loops(&stub, &options);
+    assert_eq!(gap_groups(&stub, &loops).len(), 1);
+    assert!(gap_regions(&stub, &loops, &options).0.is_empty());
 }
 
 #[test]

@@ -281,6 +281,30 @@ pub fn gap_groups(mesh: &TriMesh, loops: &[LoopInfo]) -> Vec<Vec<usize>> {
     .collect()
 }
 
+/// The gaps of `--holes`: the groups of [`gap_groups`] with their balls ([`gap_balls`]), but
+/// those whose ball holds the centroid of a loop outside the group. A cut next to a clipped end
+/// leaves a stub between them (the carotid's and the aneurysm's short branches cut through 2 mm
+/// from their ends, `benches/repair_real -- --shapes`): the stub gives the fill no anchor, which
+/// then closed the stub as a dead end and lost volume in D; such a cut is left as it is, with
+/// the rough end's notice.
+pub fn gap_regions(
+    mesh: &TriMesh,
+    loops: &[LoopInfo],
+    options: &LoopOptions,
+) -> (Vec<Vec<usize>>, Vec<Ball>) {
+    let groups = gap_groups(mesh, loops);
+    let balls = gap_balls(mesh, loops, &groups, options);
+    groups
+        .into_iter()
+        .zip(balls)
+        .filter(|(g, b)| {
+            (0..loops.len())
+                .filter(|i| !g.contains(i))
+                .all(|i| !b.contains(&loops[i].center))
+        })
+        .unzip()
+}
+
 /// One ball per gap group ([`gap_groups`]): centred on the mean of its loops' centroids, with
 /// radius `ball_factor` × the largest distance of a loop vertex from that centre plus the loops'
 /// mean edge, so that the gap and both cut ends lie inside it (as a hole's ball holds its loop).

@@ -17,9 +17,7 @@
 //!    the parameters and timings. An output that is not watertight (ends not kept open) is an
 //!    error.
 
-use super::holes::{
-    classify_loops, gap_balls, gap_groups, hole_balls, LoopInfo, LoopKind, LoopOptions,
-};
+use super::holes::{classify_loops, gap_regions, hole_balls, LoopInfo, LoopKind, LoopOptions};
 use super::region::{read_regions, Ball, PickedSite};
 use super::region_limits::check_regions;
 pub use super::region_limits::MAX_REGIONS;
@@ -310,7 +308,7 @@ fn repair_traced(
     let mut loops = Vec::new();
     if request.holes {
         let infos = classify_loops(mesh, &LoopOptions::default());
-        let gaps = gap_groups(mesh, &infos);
+        let (gaps, gap_balls) = gap_regions(mesh, &infos, &LoopOptions::default());
         let in_gap = |i: usize| gaps.iter().any(|g| g.contains(&i));
         let at = |l: &LoopInfo| {
             let [x, y, z] = [l.center.x, l.center.y, l.center.z].map(short_number);
@@ -335,7 +333,6 @@ fn repair_traced(
                 ends.join(" and "),
             ));
         }
-        let gap_regions = gap_balls(mesh, &infos, &gaps, &LoopOptions::default());
         if infos.iter().any(|l| l.kind == LoopKind::Hole) {
             let holes = hole_balls(&infos, &LoopOptions::default())
                 .map_err(|e| e.context(format!("{name}: --holes")))?;
@@ -343,7 +340,7 @@ fn repair_traced(
                 balls.push(b);
                 sources.push("hole".into());
             }
-        } else if gap_regions.is_empty() {
+        } else if gap_balls.is_empty() {
             notices.push(if infos.is_empty() {
                 "no holes found (the mesh is closed): nothing to inpaint".to_string()
             } else {
@@ -354,7 +351,7 @@ fn repair_traced(
                 )
             });
         }
-        for b in gap_regions {
+        for b in gap_balls {
             balls.push(b);
             sources.push("gap".into());
         }
