@@ -12,7 +12,7 @@
 //! An end that is planar only roughly (a "rough end": segmentations are clipped by planes, damage
 //! is not) may be a cut the damage made through the whole vessel. Where its pieces are kept, two
 //! or more such ends face each other across a short gap ([`gap_groups`]): that gap is a region
-//! of its own ([`gap_balls`]), which the fill bridges as it bridges an occlusion.
+//! of its own ([`gap_regions`]), which the fill bridges as it bridges an occlusion.
 
 use super::groups::linked_groups;
 use crate::inpaint::region::Ball;

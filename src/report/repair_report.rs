@@ -97,7 +97,8 @@ pub struct MeshPart {
     pub measures: SurfaceMeasures,
 }
 
-/// A boundary loop of the input (`--holes`): its kind (`open vessel end` or `hole`) and shape.
+/// A boundary loop of the input (`--holes`): its kind (`open vessel end`, `hole` or `cut end`,
+/// a side of a gap the damage cut through the vessel) and shape.
 #[derive(Debug, Clone, Serialize)]
 pub struct LoopReport {
     pub kind: &'static str,
