@@ -1012,8 +1012,8 @@ fn random_direction(rng: &mut SplitMix) -> Vector3<f64> {
 }
 
 /// The `--shapes` study's case of `shape` on wall point `p` (local radius `r`): every triangle
-/// with a vertex in the shape removed, the largest piece kept, as a chop; D = the ball on `p`
-/// of 1.3 × the shape's reach from `p`.
+/// with a vertex in the shape removed, the largest piece kept (every piece for [`Shape::Big`]),
+/// as a chop; D = the ball on `p` of 1.3 × the shape's reach from `p`.
 fn shape_case(
     v: &Vessel,
     n: usize,
@@ -1033,7 +1033,12 @@ fn shape_case(
         let d = random_direction(rng);
         (d - normal * d.dot(&normal))
             .try_normalize(1e-9)
-            .unwrap_or_else(|| normal.cross(&Vector3::x()).normalize())
+            .unwrap_or_else(|| {
+                normal
+                    .cross(&Vector3::x())
+                    .try_normalize(1e-9)
+                    .unwrap_or_else(Vector3::y)
+            })
     };
     let axis = random_direction(rng);
     let pair = p + along_wall * (1.6 * r);
