@@ -921,39 +921,60 @@ fn largest_component(mesh: &TriMesh) -> TriMesh {
     )
 }
 
-/// How many triangles a chop removed, and how many more went with the pieces it cut off.
-fn removed_note(v: &Vessel, holed: &TriMesh, dropped: usize) -> String {
-    format!(
-        "{} triangles removed{}",
-        v.mesh.num_faces() - holed.num_faces(),
-        if dropped > 0 {
-            format!(", {dropped} more in smaller pieces")
-        } else {
-            String::new()
-        }
-    )
+/// A case of wall damage: `v` without every triangle that has a vertex `inside` the damage, its
+/// largest piece kept (every piece with `keep_pieces`), repaired with `--holes`; the note says
+/// how many triangles were removed and how many more went with the pieces dropped.
+fn cut_case(
+    v: &Vessel,
+    label: String,
+    slug: String,
+    region: Ball,
+    r: f64,
+    keep_pieces: bool,
+    inside: impl Fn(&Point3<f64>) -> bool,
+) -> Case {
+    let holed = without(&v.mesh, |f| {
+        f.iter().any(|&i| inside(&v.mesh.vertices[i as usize]))
+    });
+    let damaged = if keep_pieces {
+        holed.clone()
+    } else {
+        largest_component(&holed)
+    };
+    let dropped = holed.num_faces() - damaged.num_faces();
+    Case {
+        label,
+        slug,
+        kind: Kind::Chop,
+        note: format!(
+            "{} triangles removed{}",
+            v.mesh.num_faces() - holed.num_faces(),
+            if dropped > 0 {
+                format!(", {dropped} more in smaller pieces")
+            } else {
+                String::new()
+            }
+        ),
+        damaged,
+        region,
+        radius: r,
+    }
 }
 
 fn chop_case(v: &Vessel, n: usize, p: Point3<f64>, r: f64, tag: &str) -> Case {
     let cut = CHOP * r;
-    let holed = without(&v.mesh, |f| {
-        f.iter()
-            .any(|&i| (v.mesh.vertices[i as usize] - p).norm() < cut)
-    });
-    let damaged = largest_component(&holed);
-    let dropped = holed.num_faces() - damaged.num_faces();
-    Case {
-        label: format!("chop#{n} ({tag})"),
-        slug: format!("chop{n}"),
-        kind: Kind::Chop,
-        note: removed_note(v, &holed, dropped),
-        damaged,
-        region: Ball {
+    cut_case(
+        v,
+        format!("chop#{n} ({tag})"),
+        format!("chop{n}"),
+        Ball {
             center: p,
             radius: CHOP_REGION * r,
         },
-        radius: r,
-    }
+        r,
+        false,
+        |x| (x - p).norm() < cut,
+    )
 }
 
 /// Which cases a run draws: the acceptance's, or a study's (`--end-bites`, `--shapes`).
@@ -1066,29 +1087,20 @@ fn shape_case(
         Shape::Small => (Box::new(move |x| (x - p).norm() < 0.6 * r), 0.6 * r),
         Shape::Big => (Box::new(move |x| (x - p).norm() < 2.2 * r), 2.2 * r),
     };
-    let holed = without(&v.mesh, |f| {
-        f.iter().any(|&i| inside(&v.mesh.vertices[i as usize]))
-    });
     // A big ball may cut the vessel in two: both pieces are kept, a gap to bridge (as the
     // occlusion's); the other shapes leave the wall whole around them.
-    let damaged = if shape == Shape::Big {
-        holed.clone()
-    } else {
-        largest_component(&holed)
-    };
-    let dropped = holed.num_faces() - damaged.num_faces();
-    Case {
-        label: format!("{}#{n} ({tag})", shape.as_str()),
-        slug: shape.as_str().into(),
-        kind: Kind::Chop,
-        note: removed_note(v, &holed, dropped),
-        damaged,
-        region: Ball {
+    cut_case(
+        v,
+        format!("{}#{n} ({tag})", shape.as_str()),
+        shape.as_str().into(),
+        Ball {
             center: p,
             radius: 1.3 * reach,
         },
-        radius: r,
-    }
+        r,
+        shape == Shape::Big,
+        inside,
+    )
 }
 
 fn stenosis_case(v: &Vessel, cl: &Centerline, site: &Site, sigma_radii: f64) -> Case {

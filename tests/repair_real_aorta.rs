@@ -18,8 +18,8 @@
 mod common;
 
 use common::{
-    chopped, data_dir, hausdorff_in, loop_kinds, one_sided_faces_near, punch_hole, vesselmsr,
-    volume_error_in,
+    chopped, cut_where, data_dir, hausdorff_in, loop_kinds, one_sided_faces_near, punch_hole,
+    vesselmsr, volume_error_in,
 };
 use nalgebra::Point3;
 use serde_json::Value;
@@ -216,20 +216,11 @@ fn a_slit_in_the_open_aortas_wall_is_filled_without_a_fin() {
     let p = Point3::new(229.38040161132812, 145.60545349121094, 21.098255793253582);
     let t = nalgebra::Vector3::new(0.19397666340627853, 0.28608394622585415, 0.9383650834113607);
     let r = 6.857025852405833;
-    let in_slit = |i: &u32| {
-        let v = truth.vertices[*i as usize] - p;
+    let damaged = cut_where(&truth, |x| {
+        let v = x - p;
         let along = v.dot(&t);
         along.abs() < 2.0 * r && (v - t * along).norm() < 0.35 * r
-    };
-    let damaged = TriMesh::new(
-        truth.vertices.clone(),
-        truth
-            .faces
-            .iter()
-            .filter(|f| !f.iter().any(in_slit))
-            .copied()
-            .collect(),
-    );
+    });
     assert_eq!(truth.num_faces() - damaged.num_faces(), 168);
     let d = Ball {
         center: p,

@@ -51,14 +51,19 @@ pub fn odd_octahedron() -> TriMesh {
     TriMesh::new(vertices, faces)
 }
 
+/// `mesh` without the triangles that have a corner `inside` the damage (every piece kept).
+pub fn cut_where(mesh: &TriMesh, inside: impl Fn(&Point3<f64>) -> bool) -> TriMesh {
+    let mut holed = mesh.clone();
+    holed
+        .faces
+        .retain(|f| !f.iter().any(|&v| inside(&mesh.vertices[v as usize])));
+    holed
+}
+
 /// `mesh` without the triangles that have a corner within `radius` of `center`: a hole in the
 /// wall there.
 pub fn punch_hole(mesh: &TriMesh, center: Point3<f64>, radius: f64) -> TriMesh {
-    let mut holed = mesh.clone();
-    holed.faces.retain(|f| {
-        f.iter()
-            .all(|&v| (mesh.vertices[v as usize] - center).norm() > radius)
-    });
+    let holed = cut_where(mesh, |p| (p - center).norm() <= radius);
     assert!(holed.num_faces() < mesh.num_faces(), "nothing punched");
     holed
 }
