@@ -814,6 +814,75 @@ fn the_centreline_traced_meanwhile_gives_the_same_repair() {
     }
 }
 
+/// A ball of 2.2 vessel radii on the wall cuts a tube in two, both pieces kept (the `big` shape
+/// of `benches/repair_real -- --shapes`): its two loops lie 0.2–0.35 of their radius off their
+/// planes, beyond an end's tolerance, so they were taken for holes and each closed alone as a
+/// dead end, the vessel left in two pieces without a word (9 of that study's 15 such cases).
+/// Two such loops on two pieces, facing each other, are one gap: bridged, one piece.
+#[test]
+fn a_tube_cut_in_two_by_a_ball_is_bridged_with_holes() {
+    let tube = phantom(PhantomKind::Tube);
+    let r = tube.radius;
+    let chop = Ball {
+        center: Point3::new(r, 0.0, 0.0),
+        radius: 2.2 * r,
+    };
+    let damaged = common::punch_hole(&tube.truth, chop.center, chop.radius);
+    assert_eq!(
+        connected_components(&damaged).0,
+        2,
+        "the ball cuts the tube"
+    );
+    let request = VesselRepair {
+        holes: true,
+        ..VesselRepair::default()
+    };
+    let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
+    let report = serde_json::to_value(&done.report).unwrap();
+    assert_eq!(loop_kinds(&report), ["cut end", "cut end"], "{report}");
+    let regions = report["regions"].as_array().unwrap();
+    assert_eq!(regions.len(), 1, "{report}");
+    assert_eq!(regions[0]["source"], "gap", "{report}");
+    assert_eq!(regions[0]["fill"], "bridge", "{report}");
+    let info = mesh_info(&done.mesh);
+    assert!(info.watertight && info.signed_volume > 0.0);
+    assert_eq!(info.components, 1, "the vessel is one piece again");
+    let d = Ball {
+        center: chop.center,
+        radius: 1.3 * chop.radius,
+    };
+    let hd = hausdorff_in(&done.mesh, &tube.truth, &[d]) / done.report.parameters.voxel;
+    let ve = volume_error_in(&done.mesh, &tube.truth, &[d]);
+    println!("tube cut in two: {hd:.2}h, {:+.2}% in D", 100.0 * ve);
+    assert!(hd <= 1.5, "{hd}h");
+    assert!(ve.abs() <= 0.02, "{ve}");
+}
+
+/// A vessel the damage left in two pieces that no region joins is told so in the report.
+#[test]
+fn an_output_left_in_pieces_gets_a_notice() {
+    let tube = phantom(PhantomKind::Tube);
+    let r = tube.radius;
+    // Cut across by a slab of 3R (both pieces kept): its two loops are planar clipped ends
+    // (not rough), so nothing is bridged.
+    let damaged = common::cut_where(&tube.truth, |p| p.z.abs() < 1.5 * r);
+    assert_eq!(connected_components(&damaged).0, 2);
+    let request = VesselRepair {
+        holes: true,
+        ..VesselRepair::default()
+    };
+    let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
+    assert_eq!(mesh_info(&done.mesh).components, 2);
+    assert!(
+        done.report
+            .notices
+            .iter()
+            .any(|n| n.contains("the output is in 2 pieces (the input in 2)")),
+        "{:?}",
+        done.report.notices
+    );
+}
+
 /// A chop of `benches/repair_real` given as its region D (the chop is D over 1.3) on `truth`,
 /// repaired with `--holes`: the repair, and its Hausdorff distance (voxels) and volume error in
 /// D against `judged` (the truth with its open ends capped flat, as the benchmark judges).

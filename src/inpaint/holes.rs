@@ -73,6 +73,15 @@ pub const GAP_REACH: f64 = 3.0;
 /// leave the parent's axis by 20–40°).
 pub const GAP_FACING: f64 = 0.7;
 
+/// A loop taken for a hole may still be one side of a cut through the vessel (its pieces kept)
+/// when it lies within this fraction of its radius off its plane: the balls of 2.2 vessel radii
+/// of `benches/repair_real -- --shapes` that cut a vessel in two left loops 0.20–0.32 off their
+/// planes, taken for holes, each then filled alone as a dead end: the vessel stayed in two
+/// pieces (9 of its 15 such cases). A loop that wraps a junction, the aorta cut with one iliac
+/// (0.46 and 0.63), is no single vessel's cut: bridged as a gap to the other iliac's end, the
+/// fill followed the aorta alone and left that iliac apart.
+pub const CUT_MAX_PLANARITY: f64 = 0.4;
+
 /// One boundary loop and its classification.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoopInfo {
@@ -101,6 +110,15 @@ impl LoopInfo {
     /// ([`ROUGH_END_PLANARITY`]): perhaps a cut made by the damage.
     pub fn is_rough_end(&self) -> bool {
         self.kind == LoopKind::End && self.planarity > ROUGH_END_PLANARITY
+    }
+
+    /// May be one side of a cut the damage made through the vessel: a rough end, or a loop
+    /// taken for a hole that lies within [`CUT_MAX_PLANARITY`] of its radius off its plane (a
+    /// ball through a tube leaves a saddle beyond an end's
+    /// [`LoopOptions::planarity_tolerance`]). Only loops on different pieces of the mesh that
+    /// face each other are then taken for a gap ([`gap_groups`]).
+    pub fn may_be_cut(&self) -> bool {
+        self.is_rough_end() || (self.kind == LoopKind::Hole && self.planarity <= CUT_MAX_PLANARITY)
     }
 }
 
@@ -238,7 +256,7 @@ pub fn hole_balls(loops: &[LoopInfo], options: &LoopOptions) -> Result<Vec<Ball>
     Ok(balls)
 }
 
-/// The groups of rough ends ([`LoopInfo::is_rough_end`]) that face each other across a short gap
+/// The groups of rough ends and holes ([`LoopInfo::may_be_cut`]) that face each other across a short gap
 /// ([`GAP_REACH`], [`GAP_FACING`]), joined through shared members (a junction severed from its
 /// branches, every piece kept, gives a group of three): each a vessel cut in two or more by the
 /// damage. Clipped ends lie within 10⁻⁴ of their plane and never join one; nor do two ends of
@@ -247,7 +265,7 @@ pub fn hole_balls(loops: &[LoopInfo], options: &LoopOptions) -> Result<Vec<Ball>
 /// is in no group.
 pub fn gap_groups(mesh: &TriMesh, loops: &[LoopInfo]) -> Vec<Vec<usize>> {
     let rough: Vec<usize> = (0..loops.len())
-        .filter(|&i| loops[i].is_rough_end())
+        .filter(|&i| loops[i].may_be_cut())
         .collect();
     if rough.len() < 2 {
         return Vec::new();

@@ -333,8 +333,15 @@ fn repair_traced(
                 ends.join(" and "),
             ));
         }
-        if infos.iter().any(|l| l.kind == LoopKind::Hole) {
-            let holes = hole_balls(&infos, &LoopOptions::default())
+        // A hole that is one side of a gap is bridged with it, not filled on its own.
+        let holes_alone: Vec<LoopInfo> = infos
+            .iter()
+            .enumerate()
+            .filter(|&(i, l)| l.kind == LoopKind::Hole && !in_gap(i))
+            .map(|(_, l)| l.clone())
+            .collect();
+        if !holes_alone.is_empty() {
+            let holes = hole_balls(&holes_alone, &LoopOptions::default())
                 .map_err(|e| e.context(format!("{name}: --holes")))?;
             for b in holes {
                 balls.push(b);
@@ -360,7 +367,7 @@ fn repair_traced(
             .enumerate()
             .map(|(i, l)| LoopReport {
                 kind: match l.kind {
-                    LoopKind::End if in_gap(i) => "cut end",
+                    _ if in_gap(i) => "cut end",
                     LoopKind::End => "open vessel end",
                     LoopKind::Hole => "hole",
                 },
@@ -446,6 +453,14 @@ fn repair_traced(
     }
     let info = mesh_info(&result.mesh);
     let input_info = mesh_info(&result.closed_input);
+    // A vessel left in pieces is told, not only counted (a gap no region bridged).
+    if info.components > 1 {
+        result.notices.push(format!(
+            "the output is in {} pieces (the input in {}): pieces the damage cut apart stay \
+             apart where no region bridges them",
+            info.components, input_info.components
+        ));
+    }
     let measure_secs = measure_start.elapsed().as_secs_f64();
     let mut timings = serde_json::Map::new();
     timings.insert("centerline".into(), centerline_secs.into());
