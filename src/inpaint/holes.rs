@@ -82,6 +82,13 @@ pub const GAP_FACING: f64 = 0.7;
 /// fill followed the aorta alone and left that iliac apart.
 pub const CUT_MAX_PLANARITY: f64 = 0.4;
 
+/// A loop taken for a hole is a cut's side only where the wall beside it runs across its plane
+/// as beside an open end (the area-weighted |wall normal · plane normal| at most this, the
+/// default [`LoopOptions::max_wall_alignment`]): the cut loops of that study's big balls read
+/// 0.28–0.44, the loops wrapping the capped aorta's junction 0.52 and 0.58; a hole in a wall
+/// reads near 1, so two vessels side by side, each with a hole facing the other, are no gap.
+pub const CUT_MAX_WALL_ALIGNMENT: f64 = 0.5;
+
 /// One boundary loop and its classification.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoopInfo {
@@ -115,10 +122,15 @@ impl LoopInfo {
     /// May be one side of a cut the damage made through the vessel: a rough end, or a loop
     /// taken for a hole that lies within [`CUT_MAX_PLANARITY`] of its radius off its plane (a
     /// ball through a tube leaves a saddle beyond an end's
-    /// [`LoopOptions::planarity_tolerance`]). Only loops on different pieces of the mesh that
-    /// face each other are then taken for a gap ([`gap_groups`]).
+    /// [`LoopOptions::planarity_tolerance`]) with the wall beside it running across that plane
+    /// as beside an end ([`CUT_MAX_WALL_ALIGNMENT`]; a hole in a wall has the wall along it).
+    /// Only loops on different pieces of the mesh that face each other are then taken for a gap
+    /// ([`gap_groups`]).
     pub fn may_be_cut(&self) -> bool {
-        self.is_rough_end() || (self.kind == LoopKind::Hole && self.planarity <= CUT_MAX_PLANARITY)
+        self.is_rough_end()
+            || (self.kind == LoopKind::Hole
+                && self.planarity <= CUT_MAX_PLANARITY
+                && self.wall_alignment <= CUT_MAX_WALL_ALIGNMENT)
     }
 }
 
