@@ -265,6 +265,29 @@ fn a_bifurcation_cut_from_its_branches_is_bridged_with_holes() {
     assert!(hd <= 12.0, "{hd}h");
 }
 
+/// The shapes study's big ball (2.2 radii) over the open aorta's bifurcation, seed 23, its
+/// pieces kept: the aorta is cut 12 mm below its clipped top, a stub whose centreline the gap's
+/// region swallows, and the two iliacs, side by side below, were the only ends left: bridged to
+/// each other, a U-turn, with the stub left apart (44.3h / −64.8% in D, two pieces). Two ends
+/// that do not face each other are now joined with the open end ahead of them as a junction.
+#[test]
+fn a_severed_bifurcation_with_a_short_stub_is_joined_as_a_junction() {
+    let file = "aorta_abdominal_open_ends.stl";
+    let truth = read_mesh(&data_dir().join(file)).unwrap();
+    let d = Ball {
+        center: Point3::new(228.02747269725148, 153.28951732873261, 26.33249918022866),
+        radius: 21.457955795473833,
+    };
+    let damaged = punch_hole(&truth, d.center, d.radius / 1.3);
+    let dir = tempfile::tempdir().unwrap();
+    let (hd, ve, report) = repair_and_check(file, &truth, &damaged, d, "--holes", dir.path());
+    assert_eq!(report["regions"][0]["source"], "gap", "{report}");
+    assert_eq!(report["regions"][0]["fill"], "junction", "{report}");
+    assert_eq!(report["output"]["components"], 1, "{report}");
+    assert!(ve.abs() <= 0.05, "{ve}");
+    assert!(hd <= 5.0, "{hd}h");
+}
+
 /// The benchmark's chop#2 of the open aorta: a hole whose region D reaches over the aortic
 /// bifurcation, so the fill is a junction of three tubes closed by balls at the junction point.
 /// The aorta's ball (7.7 mm, its anchor's radius) stood 1.2 mm outside the intact wall beside

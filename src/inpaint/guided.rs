@@ -24,7 +24,10 @@
 //!    half in a round vessel, in a few passes: [`ROUND_SECTION`]; less their bias beside D,
 //!    where the curve is the vessel's centreline: `recentre`).
 //!    Runs that end inside D (a gap: the vessel cut in two; a junction in D) give
-//!    one-sided anchors: two are bridged the same way; three or more (a bifurcation) are each
+//!    one-sided anchors: two are bridged the same way (unless neither points at the other,
+//!    [`BRIDGE_MIN_FACING`], and an open vessel end lies in E ahead of them: two branches side
+//!    by side whose junction D holds, the vessel beyond cut short; that end is then a third
+//!    branch); three or more (a bifurcation) are each
 //!    continued to the junction point (the centreline's junction inside E, not a thin spur of the
 //!    damage's skeleton: [`JUNCTION_MIN_RADIUS`]; else the point nearest to all anchor axes in
 //!    least squares), along a Hermite curve that keeps the anchor's direction twice as long as a
@@ -262,6 +265,12 @@ pub const JUNCTION_MIN_RADIUS: f64 = 0.5;
 /// nor the chart's tension (0.5, 2 against 1) does clearly better on those 61 (closer /
 /// farther: 7 / 14; 14 / 12, mean 3.78h → 3.77h; 23 / 16, median 3.06h → 3.20h; 14 / 28).
 pub const JUNCTION_TANGENTS: [f64; 2] = [2.0, 0.5];
+
+/// Two vessel ends inside D are bridged as one vessel's two sides only where each one's tangent
+/// into D points at the other within this cosine (an occlusion's ends: about 1; two sides of
+/// a gap across a right-angled bend: 0.7); the open aorta's two iliacs, side by side below a
+/// severed bifurcation, read 0.27 and 0.20.
+pub const BRIDGE_MIN_FACING: f64 = 0.5;
 
 /// A vessel counts as round where the radii of its anchors' sections vary by less than this
 /// (their standard deviation over their mean; a section reads the wall along evenly spaced
@@ -760,6 +769,54 @@ fn plan_group(
             single.push(stubs.len() - 1);
         }
     }
+    // Two ends that do not face each other are no vessel's two sides of a gap: two branches
+    // side by side, both heading into D, whose junction D holds with the vessel beyond it, cut
+    // off by the damage and too short to give an anchor (a big ball over the open aorta's
+    // bifurcation, its pieces kept: the two iliacs were bridged to each other, a U-turn, and
+    // the aorta's 12 mm stub above was left apart). That vessel's open end inside E joins them
+    // as a junction's third branch.
+    if single.len() == 2 {
+        let (a, b) = (stubs[single[0]].anchor, stubs[single[1]].anchor);
+        let facing = (b.point - a.point).try_normalize(1e-12).is_some_and(|d| {
+            a.into.dot(&d) >= BRIDGE_MIN_FACING && b.into.dot(&-d) >= BRIDGE_MIN_FACING
+        });
+        // The farthest such end ahead of the two (their tangents' sum), clear of both.
+        let ahead = a.into + b.into;
+        let mid = Point3::from((a.point.coords + b.point.coords) / 2.0);
+        let beyond = if facing {
+            None
+        } else {
+            let mut ends: Vec<&crate::centerline::Endpoint> = centerline
+                .endpoints
+                .iter()
+                .filter(|e| {
+                    e.open_end
+                        && in_e(&e.position)
+                        && (e.position - mid).dot(&ahead) > 0.0
+                        && [a, b]
+                            .iter()
+                            .all(|x| (x.point - e.position).norm() > x.radius)
+                })
+                .collect();
+            ends.sort_by(|p, q| {
+                (q.position - mid)
+                    .norm()
+                    .total_cmp(&(p.position - mid).norm())
+            });
+            ends.into_iter()
+                .find_map(|e| end_anchor(centerline, e, a.radius.min(b.radius)))
+        };
+        if let Some(anchor) = beyond {
+            stubs.push(Stub {
+                anchor,
+                outside: f64::INFINITY,
+                run: Vec::new(),
+                partner: None,
+                cut: true,
+            });
+            single.push(stubs.len() - 1);
+        }
+    }
     match single.len() {
         0 => {}
         1 if !tubes.is_empty() => {
@@ -1019,6 +1076,17 @@ fn open_end_in(
                 .norm()
                 .total_cmp(&(b.position - from.point).norm())
         })?;
+    end_anchor(centerline, end, from.radius)
+}
+
+/// An open vessel end of the centreline as an anchor: at the end, heading along its branch
+/// into the vessel (towards the branch's first point `radius` or more away; its own inscribed
+/// radius, else `radius`). None where the branch is shorter than that.
+fn end_anchor(
+    centerline: &Centerline,
+    end: &crate::centerline::Endpoint,
+    radius: f64,
+) -> Option<Anchor> {
     let br = centerline.branches.get(end.branch)?;
     let at_start = br
         .points
@@ -1028,7 +1096,7 @@ fn open_end_in(
             .points
             .last()
             .map_or(f64::INFINITY, |q| (q - end.position).norm());
-    let inward = |q: &&Point3<f64>| (*q - end.position).norm() >= from.radius;
+    let inward = |q: &&Point3<f64>| (*q - end.position).norm() >= radius;
     let inner = if at_start {
         br.points.iter().find(inward)
     } else {
@@ -1037,11 +1105,7 @@ fn open_end_in(
     Some(Anchor {
         point: end.position,
         into: (inner - end.position).try_normalize(1e-12)?,
-        radius: if end.radius > 0.0 {
-            end.radius
-        } else {
-            from.radius
-        },
+        radius: if end.radius > 0.0 { end.radius } else { radius },
         clear: false,
         branch: None,
         index: 0,
