@@ -759,14 +759,7 @@ fn plan_group(
             })
         });
         if let Some(anchor) = end {
-            stubs.push(Stub {
-                anchor,
-                outside: f64::INFINITY,
-                run: Vec::new(),
-                partner: None,
-                cut: true,
-            });
-            single.push(stubs.len() - 1);
+            add_end(&mut stubs, &mut single, anchor);
         }
     }
     // Two ends that do not face each other are no vessel's two sides of a gap: two branches
@@ -807,14 +800,7 @@ fn plan_group(
                 .find_map(|e| end_anchor(centerline, e, a.radius.min(b.radius)))
         };
         if let Some(anchor) = beyond {
-            stubs.push(Stub {
-                anchor,
-                outside: f64::INFINITY,
-                run: Vec::new(),
-                partner: None,
-                cut: true,
-            });
-            single.push(stubs.len() - 1);
+            add_end(&mut stubs, &mut single, anchor);
         }
     }
     match single.len() {
@@ -981,6 +967,19 @@ struct Stub {
     /// The anchor is a vessel's cut end inside D, read off the hole's rim ([`cut_end_in_rim`]):
     /// the vessel does not go on beyond it.
     cut: bool,
+}
+
+/// Adds a vessel's end inside D (a cut end read off the rim, an open end) as one more single
+/// anchor: the vessel goes no farther than that end.
+fn add_end(stubs: &mut Vec<Stub>, single: &mut Vec<usize>, anchor: Anchor) {
+    stubs.push(Stub {
+        anchor,
+        outside: f64::INFINITY,
+        run: Vec::new(),
+        partner: None,
+        cut: true,
+    });
+    single.push(stubs.len() - 1);
 }
 
 /// The direction in which the damaged centreline leaves the junction at `j` towards the stub's
