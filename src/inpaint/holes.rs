@@ -10,9 +10,11 @@
 //! at all. Anything that is not a clear end is a hole.
 //!
 //! An end that is planar only roughly (a "rough end": segmentations are clipped by planes, damage
-//! is not) may be a cut the damage made through the whole vessel. Where its pieces are kept, two
-//! or more such ends face each other across a short gap ([`gap_groups`]): that gap is a region
-//! of its own ([`gap_regions`]), which the fill bridges as it bridges an occlusion.
+//! is not) may be a cut the damage made through the whole vessel, and so may a loop too far off
+//! its plane for an end whose wall runs across that plane as an end's does
+//! ([`LoopInfo::may_be_cut`]). Where its pieces are kept, two or more such loops face each other
+//! across a short gap ([`gap_groups`]): that gap is a region of its own ([`gap_regions`]), which
+//! the fill bridges as it bridges an occlusion.
 
 use super::groups::linked_groups;
 use crate::inpaint::region::Ball;
@@ -63,12 +65,13 @@ impl Default for LoopOptions {
 /// 0.20, taken for an end and capped without a word before).
 pub const ROUGH_END_PLANARITY: f64 = 0.05;
 
-/// Two rough ends ([`LoopInfo::is_rough_end`]) whose centroids lie within this many sums of
-/// their radii, each facing the other ([`GAP_FACING`]), are taken for one vessel cut in two by
-/// the damage, its pieces kept: `--holes` bridges the gap between them ([`gap_balls`]).
+/// Two loops that may be a cut's sides ([`LoopInfo::may_be_cut`]) whose centroids lie within
+/// this many sums of their radii, each facing the other ([`GAP_FACING`]), are taken for one
+/// vessel cut in two by the damage, its pieces kept: `--holes` bridges the gap between them
+/// ([`gap_balls`]).
 pub const GAP_REACH: f64 = 3.0;
 
-/// How squarely two rough ends of a gap face each other: the cosine between each one's plane
+/// How squarely two sides of a gap face each other: the cosine between each one's plane
 /// normal and the line joining their centroids is at least this (a severed junction's daughters
 /// leave the parent's axis by 20–40°).
 pub const GAP_FACING: f64 = 0.7;
@@ -268,18 +271,18 @@ pub fn hole_balls(loops: &[LoopInfo], options: &LoopOptions) -> Result<Vec<Ball>
     Ok(balls)
 }
 
-/// The groups of rough ends and holes ([`LoopInfo::may_be_cut`]) that face each other across a short gap
-/// ([`GAP_REACH`], [`GAP_FACING`]), joined through shared members (a junction severed from its
-/// branches, every piece kept, gives a group of three): each a vessel cut in two or more by the
-/// damage. Clipped ends lie within 10⁻⁴ of their plane and never join one; nor do two ends of
-/// one connected piece of `mesh` (a short vessel between two rough cuts: what lies between its
-/// ends is that vessel, not a gap). Indices into `loops`, in order; a rough end with no partner
-/// is in no group.
+/// The groups of rough ends and cut-like holes ([`LoopInfo::may_be_cut`]) that face each other
+/// across a short gap ([`GAP_REACH`], [`GAP_FACING`]), joined through shared members (a
+/// junction severed from its branches, every piece kept, gives a group of three): each a vessel
+/// cut in two or more by the damage. Clipped ends lie within 10⁻⁴ of their plane and never join
+/// one; nor do two loops of one connected piece of `mesh` (a short vessel between two rough
+/// cuts: what lies between its ends is that vessel, not a gap). Indices into `loops`, in order;
+/// a loop with no partner is in no group.
 pub fn gap_groups(mesh: &TriMesh, loops: &[LoopInfo]) -> Vec<Vec<usize>> {
-    let rough: Vec<usize> = (0..loops.len())
+    let cuts: Vec<usize> = (0..loops.len())
         .filter(|&i| loops[i].may_be_cut())
         .collect();
-    if rough.len() < 2 {
+    if cuts.len() < 2 {
         return Vec::new();
     }
     // The piece of each vertex (that of a face holding it).
@@ -302,13 +305,11 @@ pub fn gap_groups(mesh: &TriMesh, loops: &[LoopInfo]) -> Vec<Vec<usize>> {
             && (a.normal.dot(&d) / len).abs() >= GAP_FACING
             && (b.normal.dot(&d) / len).abs() >= GAP_FACING
     };
-    linked_groups(rough.len(), |i, j| {
-        faces(&loops[rough[i]], &loops[rough[j]])
-    })
-    .into_iter()
-    .filter(|g| g.len() >= 2)
-    .map(|g| g.into_iter().map(|i| rough[i]).collect())
-    .collect()
+    linked_groups(cuts.len(), |i, j| faces(&loops[cuts[i]], &loops[cuts[j]]))
+        .into_iter()
+        .filter(|g| g.len() >= 2)
+        .map(|g| g.into_iter().map(|i| cuts[i]).collect())
+        .collect()
 }
 
 /// The gaps of `--holes`: the groups of [`gap_groups`] with their balls ([`gap_balls`]), but
