@@ -390,7 +390,7 @@
 //! balls of 0.9R 1.6R apart along the wall, a small ball of 0.6R (a hole in the wall alone) and
 //! a big one of 2.2R with every piece kept (it may cut the vessel through); D = the ball on the
 //! point of 1.3 × the shape's reach; repaired with `--holes` as the chops are. Seeds 21–23
-//! (2026-12-07, 75 cases): ours median 0.88h (MeshLib 1.22h), 62 within 3h (56), MeshLib beaten
+//! (2026-12-07, 75 cases): ours median 0.88h (MeshLib 1.22h), 58 within 3h (53), MeshLib beaten
 //! on 51: slits 3 of 15 (0.88h against 0.58h: the patch re-meshes the intact wall inside D's
 //! ball, which a slit's thin hole leaves almost whole), ellipsoids 14, pairs 13, small balls 11,
 //! big balls 10 (a vessel cut through is bridged where its cut ends face each other, `gap`, and
@@ -400,10 +400,10 @@
 //! the 15 big balls' outputs in two pieces: cut loops 20–32% off their planes were taken for
 //! holes and closed alone; as a gap's sides (`holes::CUT_MAX_PLANARITY`): the coronary's three
 //! 1.14h, 0.87h, 0.19h (10.01h, 5.02h, 7.16h before), the carotid's 3.92h and 6.55h (13.61h,
-//! 10.74h), big balls' median 11.47h (13.61h), the 70 other cases unchanged; and the open
-//! aorta's iliacs, bridged to each other under a severed bifurcation, joined with the aorta's
-//! open end ahead of them as a junction (`guided::BRIDGE_MIN_FACING`): 44.30h → 3.83h. 3 still
-//! in pieces, with a notice.
+//! 10.74h), big balls' median 11.47h (13.61h), the 70 other cases unchanged, 62 within 3h
+//! (MeshLib 53); and the open aorta's iliacs, bridged to each other under a severed
+//! bifurcation, joined with the aorta's open end ahead of them as a junction
+//! (`guided::BRIDGE_MIN_FACING`): 44.30h → 3.83h. 3 still in pieces, with a notice.
 //! The end-bite study, seeds 21–23 (33 bites on the four open-ended vessels; 2026-12-05, late):
 //! ours 2.57h / 1.7% at the median, 17 within 3h, better than MeshLib (13.35h / 29.8%, the
 //! whole loop capped) on 31; before a dead end went on to the end the damage reached (the
