@@ -403,7 +403,8 @@
 //! 10.74h), big balls' median 11.47h (13.61h), the 70 other cases unchanged, 62 within 3h
 //! (MeshLib 53); and the open aorta's iliacs, bridged to each other under a severed
 //! bifurcation, joined with the aorta's open end ahead of them as a junction
-//! (`guided::BRIDGE_MIN_FACING`): 44.30h → 3.83h. 3 still in pieces, with a notice.
+//! (`guided::BRIDGE_MIN_FACING`): 44.30h → 3.83h. 4 still in pieces (a cut 2 mm
+//! from a clipped end), with a notice.
 //! The end-bite study, seeds 21–23 (33 bites on the four open-ended vessels; 2026-12-05, late):
 //! ours 2.57h / 1.7% at the median, 17 within 3h, better than MeshLib (13.35h / 29.8%, the
 //! whole loop capped) on 31; before a dead end went on to the end the damage reached (the
