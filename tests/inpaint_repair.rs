@@ -815,12 +815,21 @@ fn the_centreline_traced_meanwhile_gives_the_same_repair() {
     }
 }
 
-/// A cut through a vessel that strays a third of its radius from its plane, both pieces kept
-/// (a ball of 2.2 radii through a real vessel left loops 0.20–0.32 off their planes: the `big`
-/// shape of `benches/repair_real -- --shapes`): beyond an end's tolerance, its loops were taken
-/// for holes and each closed alone as a dead end, the vessel left in two pieces without a word
-/// (9 of that study's 15 such cases). Two such loops on two pieces, facing each other, the wall
-/// beside them running across their planes as beside an end, are one gap: bridged, one piece.
+/// `mesh` repaired as `vesselmsr repair --holes` repairs it, with the defaults.
+fn repaired_holes(mesh: &TriMesh) -> RepairedVessel {
+    let request = VesselRepair {
+        holes: true,
+        ..VesselRepair::default()
+    };
+    repair_vessel(mesh, &request, &mut |_| {}).unwrap()
+}
+
+/// A cut through a vessel that strays about a quarter of its radius from its plane, both pieces
+/// kept (a ball of 2.2 radii through a real vessel left loops 0.20–0.32 off their planes: the
+/// `big` shape of `benches/repair_real -- --shapes`): beyond an end's tolerance, its loops were
+/// taken for holes and each closed alone as a dead end, the vessel left in two pieces without a
+/// word (9 of that study's 15 such cases). Two such loops on two pieces, facing each other, the
+/// wall beside them running across their planes as beside an end, are one gap: bridged.
 #[test]
 fn a_tube_cut_through_off_plane_is_bridged_with_holes() {
     let tube = phantom(PhantomKind::Tube);
@@ -837,11 +846,7 @@ fn a_tube_cut_through_off_plane_is_bridged_with_holes() {
         "{loops:?}"
     );
     assert_eq!(connected_components(&damaged).0, 2, "the cut goes through");
-    let request = VesselRepair {
-        holes: true,
-        ..VesselRepair::default()
-    };
-    let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
+    let done = repaired_holes(&damaged);
     let report = serde_json::to_value(&done.report).unwrap();
     assert_eq!(loop_kinds(&report), ["cut end", "cut end"], "{report}");
     let regions = report["regions"].as_array().unwrap();
@@ -871,11 +876,7 @@ fn an_output_left_in_pieces_gets_a_notice() {
     // (not rough), so nothing is bridged.
     let damaged = common::cut_where(&tube.truth, |p| p.z.abs() < 1.5 * r);
     assert_eq!(connected_components(&damaged).0, 2);
-    let request = VesselRepair {
-        holes: true,
-        ..VesselRepair::default()
-    };
-    let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
+    let done = repaired_holes(&damaged);
     assert_eq!(mesh_info(&done.mesh).components, 2);
     assert!(
         done.report
@@ -896,11 +897,7 @@ fn repair_bench_chop(truth: &TriMesh, judged: &TriMesh, d: Ball) -> (RepairedVes
         radius: d.radius / 1.3,
     };
     let damaged = common::chopped(truth, &chop);
-    let request = VesselRepair {
-        holes: true,
-        ..VesselRepair::default()
-    };
-    let done = repair_vessel(&damaged, &request, &mut |_| {}).unwrap();
+    let done = repaired_holes(&damaged);
     let hd = hausdorff_in(&done.mesh, judged, &[d]) / done.report.parameters.voxel;
     let ve = volume_error_in(&done.mesh, judged, &[d]);
     (done, hd, ve)
