@@ -396,9 +396,10 @@
 //! big balls 10 (a vessel cut through is bridged where its cut ends face each other, `gap`, and
 //! left as it is where the cut lies next to a clipped end). Run first by a script, the study
 //! found a slit's fin 7 mm out of the wall (22.6h; now 1.45h) and the severed bifurcations left
-//! unfilled (−68% in D; now 10.3h / −1.7% and 11.5h / −11.8%). Then (2026-12-07, evening) 9 of
-//! the 15 big balls' outputs in two pieces: cut loops 20–32% off their planes were taken for
-//! holes and closed alone; as a gap's sides (`holes::CUT_MAX_PLANARITY`): the coronary's three
+//! unfilled (−68% in D; now 10.3h / −1.7% and 11.5h / −11.8%). Then (2026-12-07, evening) 10
+//! of the 15 big balls' outputs in two pieces, 5 of them because cut loops 20–32% off their
+//! planes were taken for holes and closed alone; as a gap's sides
+//! (`holes::CUT_MAX_PLANARITY`): the coronary's three
 //! 1.14h, 0.87h, 0.19h (10.01h, 5.02h, 7.16h before), the carotid's 3.92h and 6.55h (13.61h,
 //! 10.74h), big balls' median 11.47h (13.61h), the 70 other cases unchanged, 62 within 3h
 //! (MeshLib 53); and the open aorta's iliacs, bridged to each other under a severed

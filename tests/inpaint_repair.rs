@@ -828,7 +828,7 @@ fn repaired_holes(mesh: &TriMesh) -> RepairedVessel {
 /// kept (a ball of 2.2 radii through a real vessel left loops 0.20–0.32 off their planes: the
 /// `big` shape of `benches/repair_real -- --shapes`): beyond an end's tolerance, its loops were
 /// taken for holes and each closed alone as a dead end, the vessel left in two pieces without a
-/// word (9 of that study's 15 such cases). Two such loops on two pieces, facing each other, the
+/// word (5 of that study's 15 such cases). Two such loops on two pieces, facing each other, the
 /// wall beside them running across their planes as beside an end, are one gap: bridged.
 #[test]
 fn a_tube_cut_through_off_plane_is_bridged_with_holes() {

@@ -80,7 +80,7 @@ pub const GAP_FACING: f64 = 0.7;
 /// when it lies within this fraction of its radius off its plane: the balls of 2.2 vessel radii
 /// of `benches/repair_real -- --shapes` that cut a vessel in two left loops 0.20–0.32 off their
 /// planes, taken for holes, each then filled alone as a dead end: the vessel stayed in two
-/// pieces (9 of its 15 such cases). A loop that wraps a junction, the aorta cut with one iliac
+/// pieces (5 of its 15 such cases). A loop that wraps a junction, the aorta cut with one iliac
 /// (0.46 and 0.63), is no single vessel's cut: bridged as a gap to the other iliac's end, the
 /// fill followed the aorta alone and left that iliac apart.
 pub const CUT_MAX_PLANARITY: f64 = 0.4;
