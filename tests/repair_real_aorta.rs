@@ -70,6 +70,27 @@ fn chop_and_repair(
     flags: &str,
     dir: &Path,
 ) -> (f64, f64, Value) {
+    damage_and_repair(file, centre, radius, false, flags, dir)
+}
+
+/// [`chop_and_repair`] with every piece the ball leaves kept (it may cut the vessel through),
+/// repaired with `--holes`.
+fn cut_through_and_repair(file: &str, centre: [f64; 3], radius: f64) -> (f64, f64, Value) {
+    let dir = tempfile::tempdir().unwrap();
+    damage_and_repair(file, centre, radius, true, "--holes", dir.path())
+}
+
+/// `file` (data/) without the triangles the ball of `radius` at `centre` reaches (the largest
+/// piece left, or every piece), repaired with `repair FLAGS` and checked; D is the ball grown
+/// by 1.3, as the benchmark's.
+fn damage_and_repair(
+    file: &str,
+    centre: [f64; 3],
+    radius: f64,
+    keep_pieces: bool,
+    flags: &str,
+    dir: &Path,
+) -> (f64, f64, Value) {
     let truth = read_mesh(&data_dir().join(file)).unwrap();
     let chop = Ball {
         center: Point3::from(centre),
@@ -79,7 +100,11 @@ fn chop_and_repair(
         center: chop.center,
         radius: 1.3 * radius,
     };
-    let damaged = chopped(&truth, &chop);
+    let damaged = if keep_pieces {
+        punch_hole(&truth, chop.center, radius)
+    } else {
+        chopped(&truth, &chop)
+    };
     assert!(
         damaged.num_faces() + 300 < truth.num_faces(),
         "the chop removed a wall"
@@ -240,19 +265,11 @@ fn a_slit_in_the_open_aortas_wall_is_filled_without_a_fin() {
 /// 34.6h / −55%); they are now a gap, bridged as a junction: measured 2026-12-07 10.3h / −1.8%.
 #[test]
 fn a_bifurcation_cut_from_its_branches_is_bridged_with_holes() {
-    let file = "aorta_abdominal_open_ends.stl";
-    let truth = read_mesh(&data_dir().join(file)).unwrap();
-    let chop = Ball {
-        center: Point3::new(218.62894019216657, 139.28650651820985, 17.915409997084918),
-        radius: 19.079970169931972 / 1.3,
-    };
-    let damaged = punch_hole(&truth, chop.center, chop.radius);
-    let d = Ball {
-        center: chop.center,
-        radius: 1.3 * chop.radius,
-    };
-    let dir = tempfile::tempdir().unwrap();
-    let (hd, ve, report) = repair_and_check(file, &truth, &damaged, d, "--holes", dir.path());
+    let (hd, ve, report) = cut_through_and_repair(
+        "aorta_abdominal_open_ends.stl",
+        [218.62894019216657, 139.28650651820985, 17.915409997084918],
+        19.079970169931972 / 1.3,
+    );
     let kinds = loop_kinds(&report);
     assert_eq!(
         kinds.iter().filter(|k| **k == "cut end").count(),
@@ -272,15 +289,11 @@ fn a_bifurcation_cut_from_its_branches_is_bridged_with_holes() {
 /// that do not face each other are now joined with the open end ahead of them as a junction.
 #[test]
 fn a_severed_bifurcation_with_a_short_stub_is_joined_as_a_junction() {
-    let file = "aorta_abdominal_open_ends.stl";
-    let truth = read_mesh(&data_dir().join(file)).unwrap();
-    let d = Ball {
-        center: Point3::new(228.02747269725148, 153.28951732873261, 26.33249918022866),
-        radius: 21.457955795473833,
-    };
-    let damaged = punch_hole(&truth, d.center, d.radius / 1.3);
-    let dir = tempfile::tempdir().unwrap();
-    let (hd, ve, report) = repair_and_check(file, &truth, &damaged, d, "--holes", dir.path());
+    let (hd, ve, report) = cut_through_and_repair(
+        "aorta_abdominal_open_ends.stl",
+        [228.02747269725148, 153.28951732873261, 26.33249918022866],
+        21.457955795473833 / 1.3,
+    );
     assert_eq!(report["regions"][0]["source"], "gap", "{report}");
     assert_eq!(report["regions"][0]["fill"], "junction", "{report}");
     assert_eq!(report["output"]["components"], 1, "{report}");

@@ -773,12 +773,12 @@ fn plan_group(
         let facing = (b.point - a.point).try_normalize(1e-12).is_some_and(|d| {
             a.into.dot(&d) >= BRIDGE_MIN_FACING && b.into.dot(&-d) >= BRIDGE_MIN_FACING
         });
-        // The farthest such end ahead of the two (their tangents' sum), clear of both.
-        let ahead = a.into + b.into;
-        let mid = Point3::from((a.point.coords + b.point.coords) / 2.0);
         let beyond = if facing {
             None
         } else {
+            // The farthest such end ahead of the two (their tangents' sum), clear of both.
+            let ahead = a.into + b.into;
+            let mid = Point3::from((a.point.coords + b.point.coords) / 2.0);
             let mut ends: Vec<&crate::centerline::Endpoint> = centerline
                 .endpoints
                 .iter()
