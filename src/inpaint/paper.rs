@@ -55,6 +55,34 @@
 //!   throat's radius reaches the truth's in round 10 and goes on, 0.2 a round, and the rest of
 //!   D grows too, 0.04 a round: no fixed point at the healthy tube); at c·T = 4R, 42%. No
 //!   setting is kept as a default for it.
+//!   (Checked again on 2026-12-07, late, by writing out the fill before its union with the
+//!   input: at the defaults the fill has no lumen in the middle of D, its tube ending 2–3 mm
+//!   (a radius) inside ∂D on either side; the −0.6% is the input showing through the union.)
+//! - **Tried and not kept: the paper's own threshold dynamics, in one step** (2026-12-07, late).
+//!   Algorithms 2 and 3 diffuse the indicator χ of the inside, not φ; over a time as long as a
+//!   narrowing that is non-local, as in the prototype of ../shared/notes/inpainting.md. Built as
+//!   a flow option (χ with a one-voxel ramp across the zero level set, diffused, thresholded at
+//!   the volume of the shape grown by c·T, redistanced), with the MST as one such step over T
+//!   (N = 1, σ = √(2T) ≈ 1.4R), c·T = 2R, and the crop ending 1.2R beyond D where the vessel
+//!   goes on across its face (the diffusion's mirror continues the vessel there; without it the
+//!   stenosis phantom's flat ends, 1.4R beyond D, were rounded by the MST, and the intact details
+//!   next to D carried that into D: the phantom's intact truth grew by 37% in D in 12 rounds).
+//!   On the phantoms at h ≈ R/8 it restored 98.7% (tube), 98.4% (occlusion) and 81.7%
+//!   (stenosis, no narrowing left in its coarse level) of the missing volume in 6, 6 and 12
+//!   rounds, 11–36 s at load 7. But it is not a fix: at c·T = R and 1.5R the fill still lost its
+//!   lumen in D, and in four levels of T/4 (σ ≈ 0.7R) the narrowing deepened (a long tube with
+//!   the phantom's narrowing, 20R, no end near D: −0.7%), so the result hangs on c·T; at
+//!   h = R/5 the stenosis overshot, 123%; the intact truth still grew by 12% in D (no fixed
+//!   point at the healthy shape); and on real damage (seed 21 of `benches/repair_real`, at the
+//!   default run's voxel; Hausdorff in D, volume error in D) it overfilled or ran long:
+//!   the carotid's three chops 5.80h / +51.7%, 6.47h / −24.9%, 5.53h / +44.0% (before: 6.06h /
+//!   +59.5% on the first), its occlusion 10.27h / −11.6% and the coronary's 6.60h / −18.1%
+//!   (before: the three occlusions 0.90–4.82h), the coronary's chops 7.40h / −33.8%, 6.88h /
+//!   +28.2%, 12.13h / +173%, the narrowings 11.00h / +77.7% (carotid) and 14.61h / +341%
+//!   (coronary), where the loop above leaves them as they are (−35%, −36%); the aneurysm's
+//!   first chop had not finished after 600 s (a diffusion of σ ≈ 35 voxels and a crop to
+//!   match, at its voxel of 0.06 mm). The phantoms' acceptance was bought with worse repairs
+//!   of real vessels, so the flow option and the settings were not kept.
 //! - **What a round keeps** (measured on 2026-12-07, printing each level's surface in D; the
 //!   stenosis phantom and its truth, and the same tube lengthened from 10R to 18R so that its
 //!   flat ends lie beyond the crop; R = 3, h ≈ R/8). Nothing in the loop pulls the surface in D
