@@ -69,9 +69,10 @@
 //!   next to D carried that into D: the phantom's intact truth grew by 37% in D in 12 rounds).
 //!   On the phantoms at h ≈ R/8 it restored 98.7% (tube), 98.4% (occlusion) and 81.7%
 //!   (stenosis, no narrowing left in its coarse level) of the missing volume in 6, 6 and 12
-//!   rounds, 11–36 s at load 7. But it is not a fix: at c·T = R and 1.5R the fill still lost its
-//!   lumen in D, and in four levels of T/4 (σ ≈ 0.7R) the narrowing deepened (a long tube with
-//!   the phantom's narrowing, 20R, no end near D: −0.7%), so the result hangs on c·T; at
+//!   rounds, 11–36 s at load 7. But it is not a fix: at c·T = R (one step; on a tube 20R long
+//!   with the phantom's narrowing, no end near D) and at 1.5R (four levels, on the phantom) the
+//!   fill still lost its lumen in D, and in four levels of T/4 (σ ≈ 0.7R) at 2R the narrowing
+//!   of that long tube deepened until it did too (−0.7%), so the result hangs on c·T and N; at
 //!   h = R/5 the stenosis overshot, 123%; the intact truth still grew by 12% in D (no fixed
 //!   point at the healthy shape); and on real damage (seed 21 of `benches/repair_real`, at the
 //!   default run's voxel; Hausdorff in D, volume error in D) it overfilled or ran long:
