@@ -83,7 +83,8 @@
 //!   (coronary), where the loop above leaves them as they are (−35%, −36%); the aneurysm's
 //!   first chop had not finished after 600 s (a diffusion of σ ≈ 35 voxels and a crop to
 //!   match, at its voxel of 0.06 mm). The phantoms' acceptance was bought with worse repairs
-//!   of real vessels, so the flow option and the settings were not kept.
+//!   of real vessels, so the flow option and the settings were not kept (the code: branch
+//!   `try/paper-indicator`).
 //! - **What a round keeps** (measured on 2026-12-07, printing each level's surface in D; the
 //!   stenosis phantom and its truth, and the same tube lengthened from 10R to 18R so that its
 //!   flat ends lie beyond the crop; R = 3, h ≈ R/8). Nothing in the loop pulls the surface in D
