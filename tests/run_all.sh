@@ -72,8 +72,14 @@ export VESSELMSR_PYTHON="$VENV/bin/python"
 
 rust_start=$SECONDS
 if $slow; then
-    step 2 "cargo test --release $* -- --ignored slow:: (the slow real-mesh studies)"
-    cargo_args=(--release --workspace --no-fail-fast "$@" -- --ignored slow::)
+    # libtest runs the tests that match any one of its filters, so a filter of the caller's own (a
+    # test path, with "::": msr_cortex::slow::) replaces slow:: instead of being added to it.
+    filters=(slow::)
+    for arg in "$@"; do
+        if [[ "$arg" == *::* ]]; then filters=(); fi
+    done
+    step 2 "cargo test --release $* -- --ignored ${filters[*]} (the slow real-mesh studies)"
+    cargo_args=(--release --workspace --no-fail-fast "$@" -- --ignored "${filters[@]}")
 else
     step 2 "cargo test --release $*"
     cargo_args=(--release --workspace --no-fail-fast "$@")
@@ -155,11 +161,16 @@ awk '/^test result:/ {
         }
      }
      END { printf "rust tests: %d passed, %d failed, %d ignored\n", p, f, g }' "$LOG"
-# "Running tests/x.rs (…)" names the binary of the "test NAME ... ignored, REASON" lines after it.
-ignored="$(awk '/^ *Running / { bin = $2; sub(/^tests\//, "", bin); sub(/\.rs$/, "", bin) }
-                / \.\.\. ignored/ { name = $2; reason = $0; sub(/.* \.\.\. ignored,? ?/, "", reason);
+# "test NAME ... ignored, REASON" lines. The integration tests are one binary (tests/suite), whose
+# test names carry their file as module (bvh_winding::slow::foo is in tests/suite/bvh_winding.rs):
+# listed by name alone; an ignored test of another binary (the "Running unittests src/lib.rs (…)"
+# or "Doc-tests vesselmsr" line before it) is prefixed with that binary.
+ignored="$(awk '/^ *Running / { bin = ($2 == "unittests") ? $3 : $2; if (bin == "tests/suite/main.rs") bin = "" }
+                /^ *Doc-tests / { bin = "doc-tests " $2 }
+                / \.\.\. ignored/ { name = $0; sub(/^test /, "", name); sub(/ \.\.\. ignored.*/, "", name);
+                                    reason = $0; sub(/.* \.\.\. ignored,? ?/, "", reason);
                                     if (reason == "") reason = "no reason given";
-                                    print "  " bin " " name ": " reason }' "$LOG")"
+                                    print "  " (bin == "" ? "" : bin " ") name ": " reason }' "$LOG")"
 if [[ -n "$ignored" ]]; then
     n_ignored=$(grep -c . <<<"$ignored")
     n_slow=$(grep -c ': slow:' <<<"$ignored" || true)

@@ -2,16 +2,14 @@
 //! Python reference oracle (reference/oracle.py) run in the project's virtual environment, seeded
 //! query points (points.rs), test shapes built on the library primitives (shapes.rs),
 //! hand-made mesh files (files.rs) and measures of a repair inside its region (in_region.rs).
-//! A test file uses them with `mod common; use common::*;`.
-#![allow(dead_code)]
+//! A test module uses them with `use crate::common;` (and `use common::*;`), tests/suite/main.rs
+//! declaring this module once for every test module.
 
 mod files;
 mod in_region;
 mod points;
 mod shapes;
 
-// Each test file uses only some of the helpers.
-#[allow(unused_imports)]
 pub use {files::*, in_region::*, points::*, shapes::*};
 
 use nalgebra::Point3;
@@ -44,16 +42,17 @@ pub fn real_dir() -> Option<PathBuf> {
 
 /// Says that the running test skips its checks (or part of them) for `reason`: prints
 /// "skipping: {reason}" and, when $VESSELMSR_SKIPPED names a file (tests/run_all.sh sets it and
-/// lists the file in its summary), appends the line "{test binary} {test}: {reason}" to it.
+/// lists the file in its summary), appends the line "{test}: {reason}" to it, the test by its
+/// path, whose first part is its file (`io_formats::real_meshes_…` is in tests/suite/io_formats.rs).
 pub fn skip(reason: &str) {
     use std::io::Write;
     println!("skipping: {reason}");
     let Some(path) = std::env::var_os("VESSELMSR_SKIPPED") else {
         return;
     };
-    // libtest runs each test on a thread named after it.
+    // libtest runs each test on a thread named after it (its path in the test binary).
     let test = std::thread::current().name().unwrap_or("?").to_string();
-    let line = format!("{} {test}: {reason}\n", env!("CARGO_CRATE_NAME"));
+    let line = format!("{test}: {reason}\n");
     // One short write in append mode: lines of tests running at once do not mix.
     let written = std::fs::OpenOptions::new()
         .create(true)
