@@ -69,6 +69,11 @@ else
     echo "up to date"
 fi
 export VESSELMSR_PYTHON="$VENV/bin/python"
+# The CLI that the Python steps run (reference/test_vtk_formats.py, python/tests): the one step 2
+# builds, in $CARGO_TARGET_DIR when that is set.
+target_dir="${CARGO_TARGET_DIR:-target}"
+[[ "$target_dir" == /* ]] || target_dir="$ROOT/$target_dir"
+export VESSELMSR_BIN="${VESSELMSR_BIN:-$target_dir/release/vesselmsr}"
 
 rust_start=$SECONDS
 if $slow; then
