@@ -3,20 +3,24 @@
 # tests, the Python package (python/: its wheel built by maturin, installed into the oracle
 # venv, and its pytest), and a 60 s smoke run of every fuzz target at once (fuzz/smoke.sh), a few
 # minutes from a warm build (the fuzz targets build beside steps 3 to 5). Run from anywhere;
-# extra arguments go to `cargo test`.
+# extra arguments go to `cargo test`. The integration tests are one binary, `suite`
+# (tests/suite/main.rs), a module per file: tests/suite/io_formats.rs holds io_formats::*.
 #
 #   bash tests/run_all.sh                 # the quick suite
-#   bash tests/run_all.sh --test io       # cargo test --release --test io, then the Python steps
+#   bash tests/run_all.sh --test suite io_formats::   # cargo test --release --test suite
+#                                         # io_formats:: (one file's tests), then the Python steps
 #   bash tests/run_slow.sh                # the slow real-mesh studies only (= run_all.sh --slow)
 #   VESSELMSR_FUZZ_SECONDS=10 bash tests/run_all.sh   # a shorter fuzz smoke (0 skips it);
 #                                         # ignored when CI=true: CI always runs it for 60 s
 #
 # The slow studies are Rust tests in a module `slow` marked
-# #[ignore = "slow: run by tests/run_slow.sh"]; the quick suite keeps a cheaper case of each.
+# #[ignore = "slow: run by tests/run_slow.sh"] (bvh_closest::slow::…); the quick suite keeps a
+# cheaper case of each.
 # Benchmarks (cargo bench --bench NAME) are not tests and run apart (README).
 #
 # Tests that skip checks (no ../shared/data/real, no vtk in the venv) record a line in the file
-# $VESSELMSR_SKIPPED (tests/common/mod.rs `skip`), listed in the summary with the ignored tests.
+# $VESSELMSR_SKIPPED (tests/suite/common/mod.rs `skip`), listed in the summary with the ignored
+# tests.
 # The oracle venv (reference/.venv) is created on first use and rebuilt whenever
 # reference/requirements.txt changes (its sha256 is stamped inside the venv).
 #

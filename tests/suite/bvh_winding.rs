@@ -3,8 +3,8 @@
 //! synthetic patch), and the fast hierarchical evaluation against the exact sum on the real
 //! meshes (default options within 1e-4) and on a small mesh far from the origin.
 //!
-//! `cargo test --release --test bvh_winding -- --ignored --nocapture` also prints the table of
-//! error and throughput per (order, β) that the default was chosen from.
+//! `cargo test --release --test suite bvh_winding:: -- --ignored --nocapture` also prints the
+//! table of error and throughput per (order, β) that the default was chosen from.
 
 use nalgebra::{Point3, Vector3};
 use rand::prelude::*;
@@ -339,7 +339,7 @@ fn out_of_range_options_are_clamped() {
 /// throughput on the cortex (100,000 points of the same mix, all threads, best of 5).
 /// `WINDING_SWEEP_ORDERS` and `WINDING_SWEEP_BETAS` (comma-separated) override the grid.
 #[test]
-#[ignore = "measurement, not a check: cargo test --release --test bvh_winding -- --ignored --nocapture"]
+#[ignore = "measurement, not a check: cargo test --release --test suite bvh_winding:: -- --ignored --nocapture"]
 fn winding_order_beta_sweep() {
     let Some(meshes) = real_meshes() else { return };
     let list = |key: &str, default: &str| -> Vec<f64> {

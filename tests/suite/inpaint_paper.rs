@@ -1,6 +1,6 @@
 //! `--method paper` (Algorithm 4 on the MSR, `inpaint::paper`) on the phantoms with known truth:
 //! the share of the missing volume in D it restores, (output − damaged) / (truth − damaged) with
-//! the volumes inside the balls of D (`volume_in_ball`, as tests/inpaint_repair.rs and
+//! the volumes inside the balls of D (`volume_in_ball`, as tests/suite/inpaint_repair.rs and
 //! benches/inpaint.rs measure them). At 5 voxels per radius to keep it to seconds (the default 8
 //! is measured by `benches/inpaint.rs`). The stenosis is not here: the loop does not restore a
 //! narrowing (see the module doc of `inpaint::paper`; figures in benches/inpaint.rs).
