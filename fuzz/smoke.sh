@@ -66,10 +66,12 @@ done
 host="$(rustc -vV | sed -n 's/^host: //p')"
 start=$SECONDS
 
+# cargo builds into $CARGO_TARGET_DIR when it is set (a relative one from fuzz/, where it runs).
+target_dir="${CARGO_TARGET_DIR:-$FUZZ/target}"
 if $asan; then
-    BIN="$FUZZ/target/$host/release"
+    BIN="$target_dir/$host/release"
 else
-    BIN="$FUZZ/target/$host/smoke"
+    BIN="$target_dir/$host/smoke"
 fi
 if $build && $asan; then
     if ! command -v cargo-fuzz >/dev/null; then

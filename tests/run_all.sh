@@ -3,20 +3,24 @@
 # tests, the Python package (python/: its wheel built by maturin, installed into the oracle
 # venv, and its pytest), and a 60 s smoke run of every fuzz target at once (fuzz/smoke.sh), a few
 # minutes from a warm build (the fuzz targets build beside steps 3 to 5). Run from anywhere;
-# extra arguments go to `cargo test`.
+# extra arguments go to `cargo test`. The integration tests are one binary, `suite`
+# (tests/suite/main.rs), a module per file: tests/suite/io_formats.rs holds io_formats::*.
 #
 #   bash tests/run_all.sh                 # the quick suite
-#   bash tests/run_all.sh --test io       # cargo test --release --test io, then the Python steps
+#   bash tests/run_all.sh --test suite io_formats::   # cargo test --release --test suite
+#                                         # io_formats:: (one file's tests), then the Python steps
 #   bash tests/run_slow.sh                # the slow real-mesh studies only (= run_all.sh --slow)
 #   VESSELMSR_FUZZ_SECONDS=10 bash tests/run_all.sh   # a shorter fuzz smoke (0 skips it);
 #                                         # ignored when CI=true: CI always runs it for 60 s
 #
 # The slow studies are Rust tests in a module `slow` marked
-# #[ignore = "slow: run by tests/run_slow.sh"]; the quick suite keeps a cheaper case of each.
+# #[ignore = "slow: run by tests/run_slow.sh"] (bvh_closest::slow::…); the quick suite keeps a
+# cheaper case of each.
 # Benchmarks (cargo bench --bench NAME) are not tests and run apart (README).
 #
 # Tests that skip checks (no ../shared/data/real, no vtk in the venv) record a line in the file
-# $VESSELMSR_SKIPPED (tests/common/mod.rs `skip`), listed in the summary with the ignored tests.
+# $VESSELMSR_SKIPPED (tests/suite/common/mod.rs `skip`), listed in the summary with the ignored
+# tests.
 # The oracle venv (reference/.venv) is created on first use and rebuilt whenever
 # reference/requirements.txt changes (its sha256 is stamped inside the venv).
 #
@@ -69,11 +73,22 @@ else
     echo "up to date"
 fi
 export VESSELMSR_PYTHON="$VENV/bin/python"
+# The CLI that the Python steps run (reference/test_vtk_formats.py, python/tests): the one step 2
+# builds, in $CARGO_TARGET_DIR when that is set.
+target_dir="${CARGO_TARGET_DIR:-target}"
+[[ "$target_dir" == /* ]] || target_dir="$ROOT/$target_dir"
+export VESSELMSR_BIN="${VESSELMSR_BIN:-$target_dir/release/vesselmsr}"
 
 rust_start=$SECONDS
 if $slow; then
-    step 2 "cargo test --release $* -- --ignored slow:: (the slow real-mesh studies)"
-    cargo_args=(--release --workspace --no-fail-fast "$@" -- --ignored slow::)
+    # libtest runs the tests that match any one of its filters, so a filter of the caller's own (a
+    # test path, with "::": msr_cortex::slow::) replaces slow:: instead of being added to it.
+    filters=(slow::)
+    for arg in "$@"; do
+        if [[ "$arg" == *::* ]]; then filters=(); fi
+    done
+    step 2 "cargo test --release $* -- --ignored ${filters[*]} (the slow real-mesh studies)"
+    cargo_args=(--release --workspace --no-fail-fast "$@" -- --ignored "${filters[@]}")
 else
     step 2 "cargo test --release $*"
     cargo_args=(--release --workspace --no-fail-fast "$@")
@@ -155,11 +170,16 @@ awk '/^test result:/ {
         }
      }
      END { printf "rust tests: %d passed, %d failed, %d ignored\n", p, f, g }' "$LOG"
-# "Running tests/x.rs (…)" names the binary of the "test NAME ... ignored, REASON" lines after it.
-ignored="$(awk '/^ *Running / { bin = $2; sub(/^tests\//, "", bin); sub(/\.rs$/, "", bin) }
-                / \.\.\. ignored/ { name = $2; reason = $0; sub(/.* \.\.\. ignored,? ?/, "", reason);
+# "test NAME ... ignored, REASON" lines. The integration tests are one binary (tests/suite), whose
+# test names carry their file as module (bvh_winding::slow::foo is in tests/suite/bvh_winding.rs):
+# listed by name alone; an ignored test of another binary (the "Running unittests src/lib.rs (…)"
+# or "Doc-tests vesselmsr" line before it) is prefixed with that binary.
+ignored="$(awk '/^ *Running / { bin = ($2 == "unittests") ? $3 : $2; if (bin == "tests/suite/main.rs") bin = "" }
+                /^ *Doc-tests / { bin = "doc-tests " $2 }
+                / \.\.\. ignored/ { name = $0; sub(/^test /, "", name); sub(/ \.\.\. ignored.*/, "", name);
+                                    reason = $0; sub(/.* \.\.\. ignored,? ?/, "", reason);
                                     if (reason == "") reason = "no reason given";
-                                    print "  " bin " " name ": " reason }' "$LOG")"
+                                    print "  " (bin == "" ? "" : bin " ") name ": " reason }' "$LOG")"
 if [[ -n "$ignored" ]]; then
     n_ignored=$(grep -c . <<<"$ignored")
     n_slow=$(grep -c ': slow:' <<<"$ignored" || true)

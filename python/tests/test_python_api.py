@@ -13,7 +13,7 @@
 (e) A Dask cohort (LocalCluster, 2 worker processes of 1 thread) of the 6 meshes of
     ../shared/data/real, each in its own units, plus the shipped damaged aorta: every result
     equal to the CLI's. Without ../shared the cohort is the meshes of data/, and the skip is
-    recorded in $VESSELMSR_SKIPPED as tests/common/mod.rs `skip` does for the Rust tests.
+    recorded in $VESSELMSR_SKIPPED as tests/suite/common/mod.rs `skip` does for the Rust tests.
 
 The binary is target/release/vesselmsr (tests/run_all.sh builds it first), or $VESSELMSR_BIN.
 """
@@ -50,8 +50,8 @@ REAL_UNITS = {
 
 
 def skip_checks(request, reason):
-    """Records that this test skipped (part of) its checks, as tests/common/mod.rs `skip` does:
-    prints it, and appends "test_python_api TEST: REASON" to $VESSELMSR_SKIPPED."""
+    """Records that this test skipped (part of) its checks, as tests/suite/common/mod.rs `skip`
+    does: prints it, and appends "test_python_api TEST: REASON" to $VESSELMSR_SKIPPED."""
     print(f"skipping: {reason}")
     path = os.environ.get("VESSELMSR_SKIPPED")
     if path:

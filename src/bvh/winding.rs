@@ -42,7 +42,7 @@
 //! order 3 needs β ≈ 5 (0.1 M/s); order 4 gives 7.5e-5 at β = 3 (0.22 M/s, the default);
 //! order 5 gives 7.7e-5 at β = 2.75 (0.22 M/s) and 4e-5 at β = 3. The error falls like β^−(order+2) to β^−(order+3), the cost grows
 //! like β²; the full table is printed by the ignored test `winding_order_beta_sweep` in
-//! tests/bvh_winding.rs.
+//! tests/suite/bvh_winding.rs.
 
 use std::f64::consts::PI;
 

@@ -1283,7 +1283,7 @@ fn cut_end_in_rim(rim: &[Point3<f64>], widest: f64, bvh: &MeshBvh) -> Option<Anc
     // A cut's rim is a run of the rim's own points: along the arc (the circle less its widest
     // gap, the part the damage took), no gap wider than three of the rim's spacings (points that
     // only happen to lie on one plane are scattered along it: on the rippled tube's hole of
-    // `tests/inpaint_repair.rs`, 15 of them with a gap of 12 spacings; the aneurysm's bitten
+    // `tests/suite/inpaint_repair.rs`, 15 of them with a gap of 12 spacings; the aneurysm's bitten
     // ends, 1.2 spacings). The gaps do not depend on the in-plane axes the angles are read from.
     let e1 = any_perpendicular(&out);
     let e2 = out.cross(&e1);

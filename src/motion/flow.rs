@@ -35,7 +35,7 @@
 //! ([`FlowOptions::second_order`]) the diffused φ is corrected near the surface by the
 //! trapezoidal rule and for the remaining umbilic defect (see `flow/second_order.rs`).
 //!
-//! **Valid range of Δt/h²** (measured, see tests/motion_flows.rs; h the voxel):
+//! **Valid range of Δt/h²** (measured, see tests/suite/motion_flows.rs; h the voxel):
 //! * Lower limit 0.25h² (σ = √(2Δt) ≥ 0.7h), which [`Flow::step`] enforces: below it the
 //!   Gaussian sampled on the grid has less variance than the heat kernel (0.2% less at
 //!   σ = 0.7h, 30% at 0.45h), so the surface moves too slowly (a sphere shrinking from 24h to

@@ -28,7 +28,7 @@
 //! input mesh. Nothing is stored for a sample before its birth (those entries are 0): its
 //! normals are zero there and its details too.
 //!
-//! Decoding with NumPy (`z = np.load(path)`, m = 127; tests/msr_archive.rs holds the whole
+//! Decoding with NumPy (`z = np.load(path)`, m = 127; tests/suite/msr_archive.rs holds the whole
 //! decoder): the input positions are the vertices and, for the other input samples,
 //! v_a·b_0 + v_b·b_1 + v_c·b_2 of their face's corners (faces = `np.cumsum(extra_face_steps)`).
 //! The order P is `np.argsort(key, kind="stable")`, key the Morton code (bits of x, y, z

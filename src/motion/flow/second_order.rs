@@ -18,7 +18,7 @@
 //!    amplified). Its size is capped at half of δ(x): where it would be larger, Δt·(κ₁ − κ₂)² > 1
 //!    and no truncated expansion holds (thin features about to pinch off).
 //!
-//! Measured to r = R/2 (tests/motion_flows.rs): a sphere of R = 24h stays within 0.002h of
+//! Measured to r = R/2 (tests/suite/motion_flows.rs): a sphere of R = 24h stays within 0.002h of
 //! r² = R² − 4t for Δt up to 2h² and within 0.01h at 8h²; a cylinder of R = 16h within 0.004h of
 //! r² = R² − 2t at 2h² and 0.09h at 8h² (plain thresholding: 0.18h and 1.07h).
 //!
