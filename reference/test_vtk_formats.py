@@ -7,8 +7,8 @@ against vesselmsr's .vtp and .vtk mesh files, through the CLI.
     headers, Int64 connectivity) and vtkPolyDataWriter (legacy 5.1 ASCII, and binary): `vesselmsr
     info --json` reads them with VTK's counts.
 
-The binary is target/release/vesselmsr (tests/run_all.sh builds it before running pytest), or
-$VESSELMSR_BIN.
+The binary is $VESSELMSR_BIN (tests/run_all.sh builds target/ci/vesselmsr before running pytest
+and sets it), else target/release/vesselmsr.
 """
 
 import json

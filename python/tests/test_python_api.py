@@ -15,7 +15,8 @@
     equal to the CLI's. Without ../shared the cohort is the meshes of data/, and the skip is
     recorded in $VESSELMSR_SKIPPED as tests/suite/common/mod.rs `skip` does for the Rust tests.
 
-The binary is target/release/vesselmsr (tests/run_all.sh builds it first), or $VESSELMSR_BIN.
+The binary is $VESSELMSR_BIN (tests/run_all.sh builds target/ci/vesselmsr first and sets it),
+else target/release/vesselmsr.
 """
 
 import json
