@@ -82,6 +82,61 @@ fn phantoms_stenosis_found_and_intact_vessels_clear() {
     }
 }
 
+/// A closed straight tube of radius `r` along z over [−len/2, len/2], narrowed by
+/// 1 − depth·exp(−z²/2σ²) (a Gaussian narrowing of `depth` at z = 0), flat ends, fine rings.
+fn narrowed_tube(r: f64, len: f64, depth: f64, sigma: f64) -> TriMesh {
+    let (rings, seg) = (401, 64);
+    let mut v = Vec::new();
+    for i in 0..rings {
+        let z = -0.5 * len + len * i as f64 / (rings - 1) as f64;
+        let ri = r * (1.0 - depth * (-z * z / (2.0 * sigma * sigma)).exp());
+        for j in 0..seg {
+            let a = std::f64::consts::TAU * j as f64 / seg as f64;
+            v.push(Point3::new(ri * a.cos(), ri * a.sin(), z));
+        }
+    }
+    let (bottom, top) = (v.len() as u32, v.len() as u32 + 1);
+    v.push(Point3::new(0.0, 0.0, -0.5 * len));
+    v.push(Point3::new(0.0, 0.0, 0.5 * len));
+    let at = |i: usize, j: usize| (i * seg + j % seg) as u32;
+    let mut f = Vec::new();
+    for i in 0..rings - 1 {
+        for j in 0..seg {
+            f.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
+            f.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+        }
+    }
+    for j in 0..seg {
+        f.push([bottom, at(0, j + 1), at(0, j)]);
+        f.push([top, at(rings - 1, j), at(rings - 1, j + 1)]);
+    }
+    TriMesh::new(v, f)
+}
+
+/// A short lesion (σ = 0.6 radii, the benchmark's on the aneurysm's ICA) is reported at its
+/// narrowest section: the median filter over a radius of arc that finds lesions reads a V-shaped
+/// profile a quarter of its window out (this lesion's 50% came out at 43.9% from it, 1.1 radii off).
+#[test]
+fn a_short_lesion_is_measured_at_its_narrowest_section() {
+    let r = 3.0;
+    let mesh = narrowed_tube(r, 40.0, 0.5, 0.6 * r);
+    assert!(vesselmsr::mesh::measures::signed_volume(&mesh) > 0.0);
+    let cl = centerline(&mesh);
+    let (lesions, _) = narrowings(&mesh, &cl);
+    let l = &lesions[0];
+    println!(
+        "{:.2}% diameter ({:.2}% NASCET), min {:.4} against {:.4}, at z = {:.3}",
+        l.diameter_stenosis_pct,
+        l.nascet_stenosis_pct,
+        l.min_diameter,
+        l.reference_diameter,
+        l.position[2]
+    );
+    assert!((l.diameter_stenosis_pct - 50.0).abs() <= 1.5, "{l:?}");
+    assert!((l.min_diameter - r).abs() <= 0.05 * r, "{l:?}");
+    assert!(l.position[2].abs() <= 0.1 * r, "{l:?}");
+}
+
 /// One connected graph per component: branches linked through their junctions.
 fn graph_components(cl: &Centerline) -> usize {
     let mut parent: Vec<usize> = (0..cl.branches.len()).collect();
