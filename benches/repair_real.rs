@@ -61,8 +61,8 @@
 //! gives for the damaged input. Then per tool: the medians, the cases within 1.5h and 5% and
 //! within 3h, and on how many cases ours beats each peer (smaller Hausdorff in D, as printed to
 //! 2 decimals; ties by |volume error|); ours' cases by how our report says D was filled
-//! (`fill`: through, bridge, junction, dead-end, widened, axial: median and cases beyond 3h);
-//! and our whole command's time against MeshLib's filler call, and against MeshLib's whole run,
+//! (`fill`: through, bridge, junction, dead-end, stump, widened, axial: median and cases beyond
+//! 3h); and our whole command's time against MeshLib's filler call, and against MeshLib's whole run,
 //! on the chops.
 //!
 //! Measured 2026-12-04 (late night) after the speed work of that night (the guided fill sampled

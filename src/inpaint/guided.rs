@@ -359,14 +359,23 @@ pub enum GuideKind {
     Bridge,
     /// Three or more branches meet in D: each continued to the junction point.
     Junction,
-    /// A single branch ends in D: continued along its centreline and capped.
+    /// A single branch ends in D at an end found there (an open end, a cut's plane, an intact
+    /// closed end beyond D): continued to it and cut flat.
     DeadEnd,
+    /// A single branch stops in D with nothing found beyond it: continued along its damaged
+    /// centreline and capped round. The damage may have taken what went on beyond (a
+    /// bifurcation cut off with its branches, which the input no longer holds).
+    Stump,
     /// A narrowing widened to the healthy lumen between its shoulders ([`super::widen`]).
     Widened,
 }
 
 /// The report's `fill` of a region filled as a junction ([`GuideKind::region_fill`]).
 pub const JUNCTION_FILL: &str = "junction";
+
+/// The report's `fill` of a region where a vessel stops with nothing found beyond it
+/// ([`GuideKind::Stump`]).
+pub const STUMP_FILL: &str = "stump";
 
 impl GuideKind {
     /// How a region D whose group of balls has these curves was filled, for the report: the
@@ -375,6 +384,8 @@ impl GuideKind {
         let has = |k: GuideKind| kinds.contains(&k);
         if has(GuideKind::Junction) {
             JUNCTION_FILL
+        } else if has(GuideKind::Stump) {
+            STUMP_FILL
         } else if has(GuideKind::DeadEnd) {
             "dead-end"
         } else if has(GuideKind::Bridge) {
@@ -865,27 +876,34 @@ fn plan_group(
                 .or_else(|| open_end_in(centerline, &in_e, &st.anchor))
                 .or_else(|| bitten_end(rim, &st.anchor))
                 .or_else(|| closed_end_section(&sections, &in_e, &pts, st.anchor.radius));
-            match open_end {
-                Some(end) => tubes.push(make_tube(
-                    &sections,
-                    hermite(&st.anchor, &end, spacing),
-                    &st.anchor,
-                    Some(&end),
-                    EndCap::Flat,
-                    true,
-                    0.0,
-                )),
-                None => tubes.push(make_tube(
-                    &sections,
-                    resample(&pts, spacing),
-                    &st.anchor,
-                    None,
-                    EndCap::Round,
-                    false,
-                    0.0,
-                )),
-            }
-            kinds.push(GuideKind::DeadEnd);
+            let (tube, kind) = match open_end {
+                Some(end) => (
+                    make_tube(
+                        &sections,
+                        hermite(&st.anchor, &end, spacing),
+                        &st.anchor,
+                        Some(&end),
+                        EndCap::Flat,
+                        true,
+                        0.0,
+                    ),
+                    GuideKind::DeadEnd,
+                ),
+                None => (
+                    make_tube(
+                        &sections,
+                        resample(&pts, spacing),
+                        &st.anchor,
+                        None,
+                        EndCap::Round,
+                        false,
+                        0.0,
+                    ),
+                    GuideKind::Stump,
+                ),
+            };
+            tubes.push(tube);
+            kinds.push(kind);
         }
         2 => {
             tubes.push(bridge(
@@ -2478,6 +2496,8 @@ mod tests {
             "junction"
         );
         assert_eq!(GuideKind::region_fill(&[Through, DeadEnd]), "dead-end");
+        assert_eq!(GuideKind::region_fill(&[DeadEnd, Stump]), "stump");
+        assert_eq!(GuideKind::region_fill(&[Stump, Junction]), "junction");
         assert_eq!(GuideKind::region_fill(&[Bridge, Through]), "bridge");
         assert_eq!(GuideKind::region_fill(&[Widened, Widened]), "widened");
         assert_eq!(GuideKind::region_fill(&[Through]), "through");

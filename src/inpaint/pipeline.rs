@@ -35,9 +35,9 @@ use crate::mesh::orient::orient_outward;
 use crate::mesh::topology::EdgeMap;
 use crate::mesh::units::{check_vessel_scale, VesselScaleOptions};
 use crate::report::repair_report::{
-    discount_cap_outside, is_stenosis_source, modelled_junction, region_reports, surface_measures,
-    unrestored_narrowing, LoopReport, MeshPart, RepairParameters, RepairReport, DETECTED_STENOSIS,
-    PICKED_STENOSIS,
+    discount_cap_outside, is_stenosis_source, modelled_junction, region_reports, stopped_vessel,
+    surface_measures, unrestored_narrowing, LoopReport, MeshPart, RepairParameters, RepairReport,
+    DETECTED_STENOSIS, PICKED_STENOSIS,
 };
 use crate::{Error, Result, TriMesh};
 use std::path::PathBuf;
@@ -443,11 +443,13 @@ fn repair_traced(
             result.notices.push(notice);
         }
     }
-    // A narrowing left narrowed, a junction's shape estimated: no silent failure.
+    // A narrowing left narrowed, a junction's shape estimated, a vessel that stops in D: no
+    // silent failure.
     for (k, region) in regions.iter().enumerate() {
         let notices = [
             unrestored_narrowing(k + 1, region),
             modelled_junction(k + 1, region),
+            stopped_vessel(k + 1, region),
         ];
         result.notices.extend(notices.into_iter().flatten());
     }

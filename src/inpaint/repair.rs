@@ -244,8 +244,9 @@ pub struct Repair {
     /// junction branch, a dead end, a widened narrowing).
     pub guides: Vec<GuideKind>,
     /// How each ball of D was filled: for `centerline`, its group's kind
-    /// ([`GuideKind::region_fill`]: `through`, `bridge`, `junction`, `dead-end`, `widened`) or
-    /// `axial` where no vessel passes through it on the centreline; otherwise the method's name.
+    /// ([`GuideKind::region_fill`]: `through`, `bridge`, `junction`, `dead-end`, `stump`,
+    /// `widened`) or `axial` where no vessel passes through it on the centreline; otherwise the
+    /// method's name.
     pub region_fill: Vec<&'static str>,
     /// One-line notices (regions filled another way than asked, and why).
     pub notices: Vec<String>,

@@ -9,7 +9,7 @@ use super::stenosis::{measure_stenosis_with, volume_in_ball_with, StenosisOption
 use crate::bvh::{WindingNumber, WindingOptions};
 use crate::centerline::healthy::HealthyVessel;
 use crate::error::short_number;
-use crate::inpaint::guided::{GuideKind, JUNCTION_FILL};
+use crate::inpaint::guided::{GuideKind, JUNCTION_FILL, STUMP_FILL};
 use crate::inpaint::region::Ball;
 use crate::mesh::decimate::DecimateReport;
 use crate::mesh::info::MeshInfo;
@@ -31,7 +31,7 @@ pub struct RegionReport {
     /// Where the region came from (`region`, `regions-file`, `picked point`, `hole`).
     pub source: String,
     /// How it was filled: the `centerline` fill's kind (`through`, `bridge`, `junction`,
-    /// `dead-end`, `widened`), `axial` where no vessel passes through it on the centreline, or
+    /// `dead-end`, `stump`, `widened`), `axial` where no vessel passes through it on the centreline, or
     /// the method's name (`Repair::region_fill`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fill: Option<&'static str>,
@@ -249,6 +249,23 @@ pub fn modelled_junction(k: usize, region: &RegionReport) -> Option<String> {
     ))
 }
 
+/// The notice for a region where a vessel stops with nothing found beyond it (`fill`
+/// [`STUMP_FILL`]): it is capped round where its damaged centreline stops, and whatever the
+/// damage took beyond it is not restored. On `benches/repair_real` (seeds 21–35) the one such
+/// region is seed 34's chop over the capped aorta's bifurcation, whose iliacs the chop cut off
+/// (99h in D: the input holds nothing of them). `k` counts regions from 1.
+pub fn stopped_vessel(k: usize, region: &RegionReport) -> Option<String> {
+    if region.fill != Some(STUMP_FILL) {
+        return None;
+    }
+    let [x, y, z] = region.center.map(short_number);
+    Some(format!(
+        "region {k} ({x}, {y}, {z}): a vessel stops inside it with no end found beyond (no open \
+         end, cut plane or intact closed end): it is capped round there; if the damage took its \
+         continuation (a branch, a bifurcation), that is not restored; check the picture"
+    ))
+}
+
 /// Whether a region of this source is a narrowing's (an intact, narrowed lumen, measured at
 /// its own narrowest point).
 pub fn is_stenosis_source(source: &str) -> bool {
@@ -431,6 +448,21 @@ mod tests {
         assert!(unrestored_narrowing(1, &narrowing(DETECTED_STENOSIS, 7.9, 10.0)).is_some());
         // A chop's region is no narrowing: its sections say nothing of a lesion.
         assert!(unrestored_narrowing(1, &narrowing("hole", 4.69, 8.64)).is_none());
+    }
+
+    #[test]
+    fn a_vessel_stopping_in_a_region_gets_a_notice() {
+        let mut region = narrowing("hole", 9.0, 9.0);
+        region.fill = Some("dead-end");
+        assert!(stopped_vessel(1, &region).is_none());
+        region.fill = Some(STUMP_FILL);
+        let n = stopped_vessel(2, &region).expect("a notice");
+        assert!(n.starts_with("region 2 ("), "{n}");
+        assert!(
+            n.contains("stops inside it") && n.contains("not restored"),
+            "{n}"
+        );
+        assert!(n.chars().count() <= 300, "{} characters", n.chars().count());
     }
 
     #[test]

@@ -976,6 +976,39 @@ fn a_chop_beside_a_closed_end_follows_the_vessel_to_its_end() {
     check_bench_chop("aorta_abdominal_capped.stl", d, "dead-end", 3.0, 0.03, what);
 }
 
+/// Seed 34's chop over the capped aorta's bifurcation in `benches/repair_real` cuts the iliacs
+/// off (the benchmark keeps the largest piece): the aorta stops inside D and nothing in the input
+/// says what went on beyond it. It is capped round, as before (99h / −57% in D against the
+/// truth with its bifurcation; MeshLib 122h), but now filled as a `stump`, with a notice that
+/// its continuation, if the damage took one, is not restored.
+#[test]
+fn a_vessel_cut_off_inside_d_is_a_stump_with_a_notice() {
+    let Some(dir) = common::real_dir() else {
+        return;
+    };
+    let truth = common::read_real(&dir, "aorta_abdominal_capped.stl");
+    let (judged, _) = vesselmsr::mesh::cap::cap_holes(&truth, &Default::default()).unwrap();
+    let d = Ball {
+        center: Point3::new(220.40084139937858, 128.05477877513914, 23.371687517340412),
+        radius: 15.914295326887597,
+    };
+    let (done, hd, ve) = repair_bench_chop(&truth, &judged, d);
+    println!(
+        "seed 34's chop over the bifurcation: {hd:.2}h, {:+.1}% in D",
+        100.0 * ve
+    );
+    assert_eq!(done.report.regions[0].fill, Some("stump"));
+    assert!(done.report.parameters.stitched);
+    assert!(
+        done.report
+            .notices
+            .iter()
+            .any(|n| n.contains("a vessel stops inside it") && n.contains("not restored")),
+        "{:?}",
+        done.report.notices
+    );
+}
+
 /// The coronary's bend chop in `benches/repair_real`'s draw of seed 34: the hole takes the inner
 /// side of a 48° bend, where the wall folds into a crease. The cubic between the anchors cut the
 /// bend's corner so near the hole's cap that no section of its middle read the far wall, and
