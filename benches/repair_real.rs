@@ -62,8 +62,8 @@
 //! within 3h, and on how many cases ours beats each peer (smaller Hausdorff in D, as printed to
 //! 2 decimals; ties by |volume error|); ours' cases by how our report says D was filled
 //! (`fill`: through, bridge, junction, dead-end, stump, widened, axial: median and cases beyond
-//! 3h); and our whole command's time against MeshLib's filler call, and against MeshLib's whole run,
-//! on the chops.
+//! 3h); and our whole command's time against MeshLib's filler call, and against MeshLib's whole
+//! run, on the chops.
 //!
 //! Measured 2026-12-04 (late night) after the speed work of that night (the guided fill sampled
 //! adaptively, the winding numbers built once and by translated moments, the cap's polish rounds

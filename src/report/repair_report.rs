@@ -31,8 +31,8 @@ pub struct RegionReport {
     /// Where the region came from (`region`, `regions-file`, `picked point`, `hole`).
     pub source: String,
     /// How it was filled: the `centerline` fill's kind (`through`, `bridge`, `junction`,
-    /// `dead-end`, `stump`, `widened`), `axial` where no vessel passes through it on the centreline, or
-    /// the method's name (`Repair::region_fill`).
+    /// `dead-end`, `stump`, `widened`), `axial` where no vessel passes through it on the
+    /// centreline, or the method's name (`Repair::region_fill`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fill: Option<&'static str>,
     /// Volume of the output minus that of the input inside D, world units³.
@@ -180,6 +180,12 @@ fn residual_pct(output: f64, healthy: f64) -> f64 {
     (1.0 - output / healthy) * 100.0
 }
 
+/// "region K (x, y, z)": how the notices name a region (`k` counts regions from 1).
+fn region_label(k: usize, region: &RegionReport) -> String {
+    let [x, y, z] = region.center.map(short_number);
+    format!("region {k} ({x}, {y}, {z})")
+}
+
 /// The notice for a narrowing's region (by its `source`) that the repair did not widen: the
 /// output still narrowed by [`UNRESTORED_NARROWING_PCT`] or more at the input's narrowest
 /// section. `k` counts regions from 1.
@@ -188,12 +194,12 @@ pub fn unrestored_narrowing(k: usize, region: &RegionReport) -> Option<String> {
     if !(is_stenosis_source(&region.source) && residual >= UNRESTORED_NARROWING_PCT) {
         return None;
     }
-    let [x, y, z] = region.center.map(short_number);
     let d = |v: Option<f64>| v.map_or("?".into(), short_number);
     Some(format!(
-        "region {k} ({x}, {y}, {z}): narrowing not restored: the output is still {residual:.0}% \
+        "{}: narrowing not restored: the output is still {residual:.0}% \
          narrower than the healthy lumen at the throat (diameter {} against {}); check the \
          picture, or give the region with --region",
+        region_label(k, region),
         d(region.output_diameter_at_min),
         d(region.reference_diameter),
     ))
@@ -222,11 +228,11 @@ pub fn discount_cap_outside(
     if outside <= 1e-3 * ball {
         return None;
     }
-    let [x, y, z] = region.center.map(short_number);
     Some(format!(
-        "region {k} ({x}, {y}, {z}): the hole's cap crossed space outside the vessel (a crotch \
+        "{}: the hole's cap crossed space outside the vessel (a crotch \
          between branches): {} (the mesh's units³) of the capped input there was not kept, and \
          the input's volume in the region is counted without it",
+        region_label(k, region),
         short_number(outside)
     ))
 }
@@ -241,11 +247,11 @@ pub fn modelled_junction(k: usize, region: &RegionReport) -> Option<String> {
     if region.fill != Some(JUNCTION_FILL) {
         return None;
     }
-    let [x, y, z] = region.center.map(short_number);
     Some(format!(
-        "region {k} ({x}, {y}, {z}) spans a junction: its branches are continued to a modelled \
+        "{} spans a junction: its branches are continued to a modelled \
          junction, so the carina and the flare inside it are estimated, not measured; check the \
-         picture"
+         picture",
+        region_label(k, region)
     ))
 }
 
@@ -258,11 +264,11 @@ pub fn stopped_vessel(k: usize, region: &RegionReport) -> Option<String> {
     if region.fill != Some(STUMP_FILL) {
         return None;
     }
-    let [x, y, z] = region.center.map(short_number);
     Some(format!(
-        "region {k} ({x}, {y}, {z}): a vessel stops inside it with no end found beyond (no open \
+        "{}: a vessel stops inside it with no end found beyond (no open \
          end, cut plane or intact closed end): it is capped round there; if the damage took its \
-         continuation (a branch, a bifurcation), that is not restored; check the picture"
+         continuation (a branch, a bifurcation), that is not restored; check the picture",
+        region_label(k, region)
     ))
 }
 
