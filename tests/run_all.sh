@@ -24,8 +24,8 @@
 # The oracle venv (reference/.venv) is created on first use and rebuilt whenever
 # reference/requirements.txt changes (its sha256 is stamped inside the venv).
 #
-# The Rust steps build with the profile `ci` (Cargo.toml: release with incremental compilation,
-# so a change to the library recompiles only what it touched: 50 s against 106 s in release).
+# The Rust steps build with the profile `ci` (release with incremental compilation, so a change
+# to the library recompiles only what it touched; measured in Cargo.toml's comment on it).
 # `cargo test --workspace` tests the root package only (python/ has no Rust tests) but resolves
 # the dependencies' features together with python/'s, so the wheel's `maturin build --profile
 # ci` (same target dir) reuses the compiled library and its dependencies: it compiles only the
